@@ -41,6 +41,10 @@ cli_info_usage(FILE *out) {
                  "For an irregular grid (the grid formats below): its kind, point and cell\n"
                  "counts by cell type, blocks or axes, bounds, and each field with its range\n"
                  "and missing values.\n"
+                 "For OME-Zarr: an image's label images (labels/NAME: dimensions, type,\n"
+                 "levels, colours; each opens as a label volume by its path); an HCS plate's\n"
+                 "rows x columns, wells and fields per well, and the path that opens one\n"
+                 "field (PLATE/A/1/0); a well's fields; a labels group's label images.\n"
                  "\n"
                  "Options:\n"
                  "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
@@ -65,6 +69,7 @@ cli_info_usage(FILE *out) {
                  "  volvis info ../shared/data/volumes/nut.slc\n"
                  "  volvis info --raw 256x256x128:u16:be:0.9x0.9x2 scan.raw\n"
                  "  volvis info --series 2 ~/scans/CT_folder\n"
+                 "  volvis info plate.ome.zarr\n"
                  "\n");
     cli_print_formats(out, 1);
 }
@@ -383,6 +388,64 @@ is_identity(const double d[9]) {
     return 1;
 }
 
+/* An OME-Zarr image's label images, one line each, and how to open one. */
+static void
+print_ome_zarr_labels(const char *path, const vv_ome_zarr_contents *c) {
+    const char *sub = c->kind == VV_OME_ZARR_LABELS ? "" : "/labels";
+    for (int i = 0; i < c->n_labels; i++) {
+        const vv_ome_zarr_label *L = &c->labels[i];
+        printf("%s %s: %d x %d x %d %s, %d level%s", i ? "             " : "label images:", L->name,
+               L->dims[0], L->dims[1], L->dims[2], vv_voxel_type_name(L->type), L->n_levels,
+               L->n_levels == 1 ? "" : "s");
+        if (L->n_colors)
+            printf(", %d colour%s", L->n_colors, L->n_colors == 1 ? "" : "s");
+        printf("\n");
+    }
+    if (c->n_labels)
+        printf("              (open one: volvis render %s%s/%s)\n", path, sub, c->labels[0].name);
+}
+
+/* An OME-Zarr plate, well or labels group: what it holds, which path opens an image. */
+static void
+print_ome_zarr_group(const char *path, const vv_ome_zarr_contents *c) {
+    printf("file:         %s\n", path);
+    printf("format:       %s\n", vv_format_name(VV_FORMAT_OME_ZARR));
+    if (c->kind == VV_OME_ZARR_LABELS) {
+        printf("group:        labels (%d label image%s)\n", c->n_labels,
+               c->n_labels == 1 ? "" : "s");
+        print_ome_zarr_labels(path, c);
+        return;
+    }
+    if (c->kind == VV_OME_ZARR_PLATE) {
+        printf("plate:        %s%s%s%d rows x %d columns, %d well%s", c->plate_name[0] ? "\"" : "",
+               c->plate_name, c->plate_name[0] ? "\", " : "", c->n_rows, c->n_columns, c->n_wells,
+               c->n_wells == 1 ? "" : "s");
+        if (c->field_count)
+            printf(", at most %d field%s per well", c->field_count, c->field_count == 1 ? "" : "s");
+        if (c->n_acquisitions)
+            printf(", %d acquisition%s", c->n_acquisitions, c->n_acquisitions == 1 ? "" : "s");
+        printf("\n");
+    } else {
+        printf("well:         an HCS plate's well\n");
+    }
+    const char *first = NULL, *first_well = NULL;
+    for (int i = 0; i < c->n_wells; i++) {
+        const vv_ome_zarr_well *w = &c->wells[i];
+        if (c->kind == VV_OME_ZARR_PLATE)
+            printf("%s %s: %d field%s\n", i ? "             " : "wells:       ", w->path,
+                   w->n_fields, w->n_fields == 1 ? "" : "s");
+        else
+            printf("fields:       %d\n", w->n_fields);
+        if (!first && w->first_field[0]) {
+            first = w->first_field;
+            first_well = w->path;
+        }
+    }
+    if (first)
+        printf("open a field: volvis render %s/%s%s%s (each field is an image)\n", path, first_well,
+               first_well[0] ? "/" : "", first);
+}
+
 /* Prints a .vvc's header (vv_vvc_get_info) without decoding the volume. */
 static int
 info_vvc_header(const char *path, const vv_vvc_info *vi) {
@@ -458,6 +521,21 @@ cli_info_main(int argc, char **argv) {
             return CLI_EXIT_OK; /* the list is the answer; --series N for one */
         printf("\n");
     }
+    /* an OME-Zarr group: a plate, a well or a labels group is listed (not
+     * an image); an image's label images follow its statistics */
+    vv_ome_zarr_contents zc;
+    memset(&zc, 0, sizeof zc);
+    if (!raw_spec && vv_format_detect(path) == VV_FORMAT_OME_ZARR) {
+        vv_error_clear();
+        vv_status zs = vv_ome_zarr_contents_get(path, &zc);
+        if (zs != VV_OK)
+            return cli_fail(zs, path);
+        if (zc.kind != VV_OME_ZARR_IMAGE) {
+            print_ome_zarr_group(path, &zc);
+            vv_ome_zarr_contents_clear(&zc);
+            return CLI_EXIT_OK;
+        }
+    }
     vv_volume *v;
     vv_vvc_info vinfo;
     vv_load_info axes = {.n_channels = 1, .n_times = 1};
@@ -481,6 +559,7 @@ cli_info_main(int argc, char **argv) {
             return cli_fail(s2, path);
     } else if ((rc = cli_load_volume_sc(path, raw_spec ? &raw : NULL, series, channel, time, &axes,
                                         &v))) {
+        vv_ome_zarr_contents_clear(&zc);
         return rc;
     }
 
@@ -519,6 +598,10 @@ cli_info_main(int argc, char **argv) {
     }
     printf("voxel type:   %s (%zu byte%s)\n", vv_voxel_type_name(v->type),
            vv_voxel_type_size(v->type), vv_voxel_type_size(v->type) == 1 ? "" : "s");
+    if (zc.is_label)
+        printf("labels:       a label image (OME-Zarr image-label): rendered as a label volume\n");
+    print_ome_zarr_labels(path, &zc);
+    vv_ome_zarr_contents_clear(&zc);
     printf("spacing:      %g x %g x %g%s%s\n", v->spacing[0], v->spacing[1], v->spacing[2],
            v->unit == VV_UNIT_UNKNOWN ? "" : " ", v->unit == VV_UNIT_UNKNOWN ? "" : unit);
     printf("origin:       %g %g %g\n", v->origin[0], v->origin[1], v->origin[2]);

@@ -134,6 +134,9 @@ typedef struct vv_load_info {
     /** The row of the format table that read the file (set by the loader
      *  in this process, also when detection ran in the reader sandbox). */
     vv_format format;
+    /** 1: the image is a label image (OME-Zarr image-label metadata: segment
+     *  ids); a World made of it shows it as a label volume (VV_SEG_LABELS) */
+    int is_label;
 } vv_load_info;
 
 /** Options for vv_volume_load. */
@@ -356,6 +359,65 @@ void vv_time_series_free(vv_time_series *ts);
  * VV_FORMAT_UNKNOWN.
  */
 vv_format vv_format_from_extension(const char *path);
+
+/** Name bytes of an OME-Zarr label image's or well's path, with its NUL. */
+#define VV_OME_ZARR_NAME_MAX 128
+/** The most label images and wells vv_ome_zarr_contents_get lists (more are refused). */
+#define VV_OME_ZARR_LABELS_MAX 256
+#define VV_OME_ZARR_WELLS_MAX 4096
+
+/** One label image of an OME-Zarr image (its "labels" group). */
+typedef struct vv_ome_zarr_label {
+    char name[VV_OME_ZARR_NAME_MAX]; /**< its path under labels/ */
+    int dims[3];                     /**< level 0's voxels (x, y, z) */
+    vv_voxel_type type;
+    int n_levels;
+    int n_colors; /**< image-label colors given (label-value, rgba) */
+} vv_ome_zarr_label;
+
+/** One well of an HCS plate. */
+typedef struct vv_ome_zarr_well {
+    char path[VV_OME_ZARR_NAME_MAX];        /**< "A/1" */
+    int row, column;                        /**< rowIndex, columnIndex */
+    int n_fields;                           /**< its well.images */
+    char first_field[VV_OME_ZARR_NAME_MAX]; /**< its first image's path ("0") */
+} vv_ome_zarr_well;
+
+/** What an OME-Zarr group holds besides (or instead of) an image. */
+typedef enum vv_ome_zarr_kind {
+    VV_OME_ZARR_IMAGE = 0, /**< a multiscales image (or a plain array) */
+    VV_OME_ZARR_PLATE,     /**< an HCS plate: open one field (PLATE/A/1/0) */
+    VV_OME_ZARR_WELL,      /**< one well of a plate: open one field (WELL/0) */
+    VV_OME_ZARR_LABELS     /**< an image's labels group: open one (labels/NAME) */
+} vv_ome_zarr_kind;
+
+typedef struct vv_ome_zarr_contents {
+    vv_ome_zarr_kind kind;
+    int is_label;              /**< an image with image-label metadata */
+    int n_labels;              /**< label images (an image's labels/, or a labels group) */
+    vv_ome_zarr_label *labels; /**< n_labels entries (vv_ome_zarr_contents_clear frees) */
+    char plate_name[VV_OME_ZARR_NAME_MAX];
+    int n_rows, n_columns; /**< a plate's rows and columns */
+    int field_count;       /**< a plate's field_count (0: not given) */
+    int n_acquisitions;
+    int n_wells;
+    vv_ome_zarr_well *wells; /**< n_wells entries (a well: one, path "") */
+} vv_ome_zarr_contents;
+
+/**
+ * What the OME-Zarr group at folder @p path holds (its .zattrs, or zarr.json's
+ * attributes.ome): an image and its label images (each one's level 0 dims and
+ * type), an HCS plate and its wells (each well group's images), a well, or a
+ * labels group. Every path the metadata names (wells, fields, labels) is
+ * checked as a dataset's is: relative, no "..", not leading out of the store
+ * by a link; at most VV_OME_ZARR_WELLS_MAX wells and VV_OME_ZARR_LABELS_MAX
+ * labels. Errors (one line, naming the file and the field): VV_ERR_FORMAT,
+ * VV_ERR_LIMIT, VV_ERR_IO, VV_ERR_NOMEM. Free with vv_ome_zarr_contents_clear.
+ */
+vv_status vv_ome_zarr_contents_get(const char *path, vv_ome_zarr_contents *out);
+
+/** Frees what vv_ome_zarr_contents_get allocated in @p c; NULL is a no-op. */
+void vv_ome_zarr_contents_clear(vv_ome_zarr_contents *c);
 
 /** Options for vv_volume_save_with. */
 typedef struct vv_save_options {

@@ -50,6 +50,7 @@ io_info_from_wire(vv_load_info *info, const unsigned char *bytes, size_t n) {
     info->n_levels = w.n_levels;
     info->n_slices = w.n_slices;
     info->has_color = w.has_color != 0;
+    info->is_label = w.is_label == 1;
     memcpy(info->color, w.color, sizeof info->color);
     info->time_step = w.time_step;
     /* offsets into the file, checked against its size by their reader */
@@ -194,6 +195,7 @@ io_open_store(const vv_format_record *r, vv_store *st, const char *path, int cha
     }
     if (info) {
         info->has_color = got.has_color;
+        info->is_label = got.is_label;
         memcpy(info->color, got.color, sizeof info->color);
         memcpy(info->channel_name, got.channel_name, sizeof info->channel_name);
     }

@@ -333,7 +333,8 @@ vv_scene_load_open(vv_world **out, const char *path, const vv_progress *progress
     vv_status st = vv_read_file(path, SCENE_MAX_BYTES, &data, &size);
     if (st != VV_OK)
         return vv_error_prefix(st, "scene");
-    sctx c = {path, (const char *)data, (size_t)size, progress, cache, open};
+    scene_sources *shared = calloc(1, sizeof *shared); /* NULL: each object its own */
+    sctx c = {path, (const char *)data, (size_t)size, progress, cache, open, shared};
     json_error_t jerr;
     json_t *root = json_loadb((const char *)data, (size_t)size,
                               JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &jerr);
@@ -341,12 +342,15 @@ vv_scene_load_open(vv_world **out, const char *path, const vv_progress *progress
         st = vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s", path, jerr.line > 0 ? jerr.line : 1,
                           jerr.column > 0 ? jerr.column : 1, jerr.text);
         free(data);
+        free(shared);
         return st;
     }
     vv_world *w = NULL;
     st = vv_world_new(&w);
     if (st == VV_OK)
         st = parse_scene(&c, root, w);
+    vv_scene_sources_clear(shared);
+    free(shared);
     json_decref(root);
     free(data);
     if (st != VV_OK) {

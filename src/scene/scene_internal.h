@@ -20,6 +20,22 @@
 #define PATH_MAX_LEN 256
 #define IMAGE_MAX_SIDE 32768
 
+/* Files a scene opened out of core, each once: objects naming the same
+ * file (and step) share its source, so that its chunks, shard indexes and
+ * loader threads are held once and count once against the cache's limit. */
+#define SCENE_SOURCES_MAX 64
+typedef struct scene_source {
+    char *real; /* the file's real path (malloc) */
+    int time;
+    vv_source *source; /* a reference */
+    int is_label;      /* an OME-Zarr label image (vv_load_info.is_label) */
+} scene_source;
+
+typedef struct scene_sources {
+    scene_source e[SCENE_SOURCES_MAX];
+    int n;
+} scene_sources;
+
 /** A scene file being read. */
 typedef struct sctx {
     const char *path; /* scene file as given */
@@ -29,7 +45,11 @@ typedef struct sctx {
     vv_filter_cache *fcache;     /* filtered volumes kept between loads; may be NULL */
     /* how unfiltered volume files open (vv_open); NULL: whole, into memory */
     const vv_open_options *open;
+    scene_sources *sources; /* the files opened out of core so far; may be NULL */
 } sctx;
+
+/* Frees what @p s holds of the sources (the objects keep theirs). */
+void vv_scene_sources_clear(scene_sources *s);
 
 /** The render modes' names in scene files, by vv_render_mode. */
 extern const char *const vv_scene_mode_names[5];

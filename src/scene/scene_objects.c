@@ -79,6 +79,47 @@ vv_scene_get_object_name(const sctx *c, json_t *e, const char *op, const char **
  * or true/null for a filter without one). On error *@p bad_item is the
  * array index at fault (-1: the value itself) and the message says why.
  * Errors: VV_ERR_INVALID, VV_ERR_NOMEM. */
+/* The source an earlier object opened out of core for file @p full at
+ * step @p time (the same real path), or NULL. */
+static scene_source *
+find_source(const sctx *c, const char *full, int time) {
+    scene_sources *s = c->sources;
+    char *real = s && s->n ? realpath(full, NULL) : NULL;
+    scene_source *hit = NULL;
+    for (int i = 0; real && i < s->n && !hit; i++)
+        if (s->e[i].time == time && !strcmp(s->e[i].real, real))
+            hit = &s->e[i];
+    free(real);
+    return hit;
+}
+
+/* Keeps @p source (out of core) for the objects after this one that name
+ * file @p full at step @p time; past SCENE_SOURCES_MAX files they open
+ * their own. */
+static void
+keep_source(const sctx *c, const char *full, int time, vv_source *source, int is_label) {
+    if (!c->sources || c->sources->n >= SCENE_SOURCES_MAX)
+        return;
+    char *real = realpath(full, NULL);
+    if (!real)
+        return;
+    scene_source *e = &c->sources->e[c->sources->n++];
+    e->real = real;
+    e->time = time;
+    e->source = vv_source_ref(source);
+    e->is_label = is_label;
+}
+
+void
+vv_scene_sources_clear(scene_sources *s) {
+    for (int i = 0; s && i < s->n; i++) {
+        free(s->e[i].real);
+        vv_source_free(s->e[i].source);
+    }
+    if (s)
+        s->n = 0;
+}
+
 static vv_status
 chain_from_json(const json_t *j, vv_filter_chain **out, int *bad_item) {
     *bad_item = -1;
@@ -193,6 +234,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     vv_volume *vol = NULL;
     vv_source *source = NULL; /* the file out of core (vol its proxy) */
     int source_level = 0;
+    int is_label = 0;            /* the file is an OME-Zarr label image */
     double scale[3] = {1, 1, 1}; /* the volume's voxel over the file's */
     /* "filters": a filter chain applied at load (src/filter), the result cached */
     json_t *fj = json_object_get(e, "filters");
@@ -216,16 +258,25 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
                                    chain, &fo, &vol);
     } else if (c->open && c->open->mode != VV_OPEN_WHOLE) {
-        /* out of core where the file and the options allow (vv_open) */
-        vv_open_options oo = *c->open;
-        vv_load_options_init(&oo.load);
-        oo.load.time = time;
-        vv_opened od;
-        vv_error_clear();
-        st = vv_open(&od, full, &oo);
-        if (st == VV_OK && od.kind != 0)
-            st = vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", full);
+        /* out of core where the file and the options allow (vv_open); a
+         * file an earlier object opened out of core: its source, shared */
         const int level = c->open->load.level > 0 ? c->open->load.level : 0;
+        scene_source *shared = find_source(c, full, time);
+        vv_opened od;
+        memset(&od, 0, sizeof od);
+        if (shared) {
+            od.source = vv_source_ref(shared->source);
+            od.info.is_label = shared->is_label;
+            st = VV_OK;
+        } else {
+            vv_open_options oo = *c->open;
+            vv_load_options_init(&oo.load);
+            oo.load.time = time;
+            vv_error_clear();
+            st = vv_open(&od, full, &oo);
+            if (st == VV_OK && od.kind != 0)
+                st = vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", full);
+        }
         if (st == VV_OK && (vol = vv_source_volume(od.source))) {
             vv_volume_ref(vol);
         } else if (st == VV_OK && (st = vv_source_proxy(od.source, level, &vol)) == VV_OK) {
@@ -234,14 +285,21 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
             source_level = level;
             for (int k = 0; k < 3; k++) /* a "spacing" is the file's, of its level 0 */
                 scale[k] = vol->spacing[k] / h0->spacing[k];
+            if (!shared)
+                keep_source(c, full, time, source, od.info.is_label);
         }
+        is_label = st == VV_OK && od.info.is_label;
         vv_opened_clear(&od);
     } else {
         vv_load_options lo;
         vv_load_options_init(&lo);
         lo.time = time;
+        vv_load_info li;
+        memset(&li, 0, sizeof li);
+        lo.info = &li;
         vv_error_clear();
         st = vv_volume_load(&vol, full, &lo);
+        is_label = st == VV_OK && li.is_label;
     }
     if (st != VV_OK) {
         vv_filter_chain_free(chain);
@@ -310,6 +368,12 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     }
     vv_filter_chain_free(chain);
     st = vv_scene_parse_object_fields(c, e, op, o);
+    /* an OME-Zarr label image (image-label) without an appearance of its
+     * own shows as a label volume (a saved scene always names its
+     * transfer_function, so a saved one keeps what it had) */
+    if (st == VV_OK && is_label && !json_object_get(e, "segmentation") &&
+        !json_object_get(e, "transfer_function"))
+        o->segmentation = VV_SEG_LABELS;
     if (st == VV_OK)
         st = vv_scene_parse_effect_flags(c, e, op, o);
     if (st == VV_OK)

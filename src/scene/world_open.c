@@ -455,6 +455,8 @@ world_for_file(const vv_world_open_options *o, const char *what, vv_world **out,
     s = vv_world_new_for_source(out, od.source, o->level > 0 ? o->level : 0, &d);
     if (s == VV_OK && od.info.n_levels > 1)
         pyramid_appearance(o, what, od.source, *out);
+    if (s == VV_OK && od.info.is_label) /* an OME-Zarr label image: segment ids */
+        (*out)->objects[0]->segmentation = VV_SEG_LABELS;
     vv_opened_clear(&od); /* the World holds its own reference */
     if (s != VV_OK)
         return fail(s, what);

@@ -1021,6 +1021,213 @@ test_info_level_paths(void **state) {
     }
 }
 
+/* A scene naming one OME-Zarr store in three objects, out of core: the
+ * objects share one source (one client of the cache: its chunks, shard
+ * indexes and loader threads held once), not three that each hold and
+ * count the same chunks; another step of the store is a source of its own. */
+static void
+test_scene_shares_store(void **state) {
+    (void)state;
+    const char *dir = fresh("scene_share");
+    char store[4600], scene[4600], other[4600];
+    snprintf(store, sizeof store, "%s/img.ome.zarr", dir);
+    snprintf(other, sizeof other, "%s/two.ome.zarr", dir);
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, (const int[3]){64, 48, 40}, VV_U16));
+    for (uint64_t i = 0; i < vv_volume_voxel_count(v); i++)
+        ((uint16_t *)v->data)[i] = (uint16_t)(i * 7 % 4000);
+    vv_save_options so;
+    vv_save_options_init(&so);
+    so.format = VV_FORMAT_OME_ZARR;
+    vt_ok(vv_volume_save_with(v, store, &so));
+    vt_ok(vv_volume_save_with(v, other, &so));
+    vv_volume_free(v);
+    snprintf(scene, sizeof scene, "%s/scene.json", dir);
+    put_text(dir, "scene.json",
+             "{\"objects\": [{\"name\": \"a\", \"file\": \"img.ome.zarr\"}, "
+             "{\"name\": \"b\", \"file\": \"img.ome.zarr\", \"position\": [80, 0, 0]}, "
+             "{\"name\": \"c\", \"file\": \"./img.ome.zarr\"}, "
+             "{\"name\": \"d\", \"file\": \"two.ome.zarr\"}]}");
+    vv_cache *cache = vt_cache(64u << 20);
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE;
+    oo.cache = cache;
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load_open(&w, scene, NULL, NULL, &oo));
+    assert_int_equal(w->n_objects, 4);
+    for (int i = 0; i < 4; i++)
+        assert_non_null(w->objects[i]->source);
+    assert_ptr_equal(w->objects[0]->source, w->objects[1]->source);
+    assert_ptr_equal(w->objects[0]->source, w->objects[2]->source);
+    assert_ptr_not_equal(w->objects[0]->source, w->objects[3]->source);
+    vv_cache_stats st;
+    vv_cache_stats_get(cache, &st);
+    assert_int_equal(st.sources, 2); /* img.ome.zarr once, two.ome.zarr once */
+    vv_world_free(w);
+    vv_cache_stats_get(cache, &st);
+    assert_int_equal(st.sources, 0); /* the last object's reference closed it */
+}
+
+/* An HCS plate (v2) and an image with labels listed by
+ * vv_ome_zarr_contents_get; hostile plates and label groups refused in one
+ * line naming the file and the field, by the listing and by a read. */
+#define PLATE_(wells, more)                                                                        \
+    "{\"plate\": {\"rows\": [{\"name\": \"A\"}, {\"name\": \"B\"}], \"columns\": [{\"name\": "     \
+    "\"1\"}], \"wells\": " wells more "}}"
+#define WELL_A1 "{\"path\": \"A/1\", \"rowIndex\": 0, \"columnIndex\": 0}"
+
+static const char *
+plate_store(const char *name, const char *plate, const char *well) {
+    const char *dir = fresh(name);
+    put_text(dir, ".zattrs", plate);
+    put_text(dir, "A/1/.zattrs", well);
+    put_text(dir, "A/1/0/.zattrs", MS("0", SC3));
+    put_text(dir, "A/1/0/0/.zarray", ZA);
+    return dir;
+}
+
+static void
+contents_expect(const char *dir, vv_status want, const char *needle) {
+    vv_ome_zarr_contents c;
+    vv_status s = vv_ome_zarr_contents_get(dir, &c);
+    assert_null(c.wells);
+    assert_null(c.labels);
+    expect(s, want, needle, base(dir));
+    load_expect(dir, 0, 0, 0, want, needle); /* a read refuses it alike */
+}
+
+static void
+test_plate_labels(void **state) {
+    (void)state;
+    const char *wimg = "{\"well\": {\"images\": [{\"path\": \"0\"}, {\"path\": \"1\"}]}}";
+    const char *dir =
+        plate_store("plate.zarr", PLATE_("[" WELL_A1 "]", ", \"field_count\": 2"), wimg);
+    vv_ome_zarr_contents c;
+    vt_ok(vv_ome_zarr_contents_get(dir, &c));
+    assert_int_equal(c.kind, VV_OME_ZARR_PLATE);
+    assert_int_equal(c.n_rows, 2);
+    assert_int_equal(c.n_columns, 1);
+    assert_int_equal(c.field_count, 2);
+    assert_int_equal(c.n_wells, 1);
+    assert_string_equal(c.wells[0].path, "A/1");
+    assert_int_equal(c.wells[0].n_fields, 2);
+    assert_string_equal(c.wells[0].first_field, "0");
+    vv_ome_zarr_contents_clear(&c);
+    load_expect(dir, 0, 0, 0, VV_ERR_FORMAT, "plate.zarr/A/1/0)");
+    /* the field reads as an image */
+    char field[4700];
+    snprintf(field, sizeof field, "%s/A/1/0", dir);
+    vv_load_options o;
+    vv_load_options_init(&o);
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, field, &o));
+    assert_int_equal(v->dims[0], 4);
+    vv_volume_free(v);
+    /* hostile plates */
+    contents_expect(
+        plate_store("p_dotdot.zarr",
+                    PLATE_("[{\"path\": \"A/..\", \"rowIndex\": 0, \"columnIndex\": 0}]", ""),
+                    wimg),
+        VV_ERR_FORMAT, ".zattrs: plate.wells 0: path \"A/..\" leaves the store");
+    contents_expect(plate_store("p_abs.zarr",
+                                PLATE_("[{\"path\": \"/etc/x\", \"rowIndex\": 0, \"columnIndex\": "
+                                       "0}]",
+                                       ""),
+                                wimg),
+                    VV_ERR_FORMAT, "plate.wells 0: path \"/etc/x\" leaves the store");
+    contents_expect(plate_store("p_nopath.zarr", PLATE_("[{\"rowIndex\": 0}]", ""), wimg),
+                    VV_ERR_FORMAT, "plate.wells 0: no path");
+    contents_expect(
+        plate_store("p_col.zarr",
+                    PLATE_("[{\"path\": \"A/1\", \"rowIndex\": 0, \"columnIndex\": 1}]", ""), wimg),
+        VV_ERR_FORMAT, "plate.wells 0: rowIndex or columnIndex");
+    contents_expect(
+        plate_store("p_fc.zarr", PLATE_("[" WELL_A1 "]", ", \"field_count\": -1"), wimg),
+        VV_ERR_FORMAT, "plate.field_count is not a count");
+    contents_expect(plate_store("p_rows.zarr", "{\"plate\": {\"rows\": 3}}", wimg), VV_ERR_FORMAT,
+                    "plate.rows is not a list");
+    contents_expect(plate_store("p_field.zarr", PLATE_("[" WELL_A1 "]", ""),
+                                "{\"well\": {\"images\": [{\"path\": \"0/../../..\"}]}}"),
+                    VV_ERR_FORMAT, "A/1/.zattrs: well.images 0: path \"0/../../..\"");
+    contents_expect(plate_store("p_ctl.zarr", PLATE_("[" WELL_A1 "]", ""),
+                                "{\"well\": {\"images\": [{\"path\": \"0\\n1\"}]}}"),
+                    VV_ERR_FORMAT, "A/1/.zattrs: well.images 0: path");
+    /* 4097 wells */
+    char *big = malloc(4097 * 64 + 256);
+    assert_non_null(big);
+    int n = sprintf(big, "{\"plate\": {\"rows\": [], \"columns\": [], \"wells\": [");
+    for (int i = 0; i < 4097; i++)
+        n += sprintf(big + n, "%s" WELL_A1, i ? ", " : "");
+    sprintf(big + n, "]}}");
+    contents_expect(plate_store("p_many.zarr", big, wimg), VV_ERR_LIMIT,
+                    "plate.wells: 4097 entries (at most 4096 are read)");
+    free(big);
+    /* an image with labels; a label named out of the store */
+    char img[4600]; /* fresh's buffer is reused below */
+    snprintf(img, sizeof img, "%s", fresh("img_labels.zarr"));
+    dir = img;
+    put_text(dir, ".zattrs", MS("0", SC3));
+    put_text(dir, "0/.zarray", ZA);
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"cells\"]}");
+    put_text(dir, "labels/cells/.zattrs",
+             "{\"multiscales\": [{\"axes\": " AX3 ", \"datasets\": [{\"path\": \"0\"}]}], "
+             "\"image-label\": {\"colors\": [{\"label-value\": 1, \"rgba\": [1, 2, 3, 4]}]}}");
+    put_text(dir, "labels/cells/0/.zarray", ZA_("[4, 4, 4]", "[2, 2, 2]", "<u2", ""));
+    vt_ok(vv_ome_zarr_contents_get(dir, &c));
+    assert_int_equal(c.kind, VV_OME_ZARR_IMAGE);
+    assert_int_equal(c.n_labels, 1);
+    assert_string_equal(c.labels[0].name, "cells");
+    assert_int_equal(c.labels[0].type, VV_U16);
+    assert_int_equal(c.labels[0].n_colors, 1);
+    vv_ome_zarr_contents_clear(&c);
+    vv_load_info info;
+    memset(&info, 0, sizeof info);
+    vv_load_options_init(&o);
+    o.info = &info;
+    snprintf(field, sizeof field, "%s/labels/cells", dir);
+    vt_ok(vv_volume_load(&v, field, &o));
+    assert_int_equal(info.is_label, 1);
+    vv_volume_free(v);
+    /* a scene object naming the label image, read whole and out of core:
+     * a label volume unless the object says otherwise */
+    put_text(dir, "scene.json",
+             "{\"objects\": [{\"file\": \"labels/cells\"}, {\"file\": \"labels/cells\", "
+             "\"position\": [9, 0, 0], \"segmentation\": \"transfer_function\"}]}");
+    char scene[4700];
+    snprintf(scene, sizeof scene, "%s/scene.json", dir);
+    for (int ooc = 0; ooc < 2; ooc++) {
+        vv_open_options oo;
+        vv_open_options_init(&oo);
+        oo.mode = VV_OPEN_OUT_OF_CORE;
+        oo.cache = vt_cache(64u << 20);
+        vv_world *w = NULL;
+        vt_ok(vv_scene_load_open(&w, scene, NULL, NULL, ooc ? &oo : NULL));
+        assert_int_equal(w->n_objects, 2);
+        assert_int_equal(w->objects[0]->segmentation, VV_SEG_LABELS);
+        assert_int_equal(w->objects[1]->segmentation, VV_SEG_TRANSFER_FUNCTION);
+        vv_world_free(w);
+    }
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"../0\"]}");
+    vv_status s = vv_ome_zarr_contents_get(dir, &c);
+    expect(s, VV_ERR_FORMAT, "labels/.zattrs: labels 0: path \"../0\" leaves the store",
+           "img_labels.zarr");
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"0\"]}"); /* not a multiscales image */
+    s = vv_ome_zarr_contents_get(dir, &c);
+    expect(s, VV_ERR_FORMAT, "labels 0: \"0\" is not a multiscales image", "img_labels.zarr");
+    /* a label folder that is a link out of the store */
+    const char *out = fresh("outside_labels");
+    put_text(out, ".zattrs",
+             "{\"multiscales\": [{\"axes\": " AX3 ", \"datasets\": [{\"path\": "
+             "\"0\"}]}]}");
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"ext\"]}");
+    char link[4700];
+    snprintf(link, sizeof link, "%s/labels/ext", dir);
+    assert_int_equal(symlink(out, link), 0);
+    s = vv_ome_zarr_contents_get(dir, &c);
+    expect(s, VV_ERR_FORMAT, "labels/ext/.zattrs leaves the store", "img_labels.zarr");
+}
+
 int
 main(void) {
     setenv("VOLVIS_SANDBOX", "0", 1);
@@ -1033,7 +1240,8 @@ main(void) {
         cmocka_unit_test(test_arguments),        cmocka_unit_test(test_pyramid),
         cmocka_unit_test(test_pyramid_requests), cmocka_unit_test(test_v3_good),
         cmocka_unit_test(test_v3_box_bytes),     cmocka_unit_test(test_v3_hostile),
-        cmocka_unit_test(test_info_level_paths),
+        cmocka_unit_test(test_info_level_paths), cmocka_unit_test(test_scene_shares_store),
+        cmocka_unit_test(test_plate_labels),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

@@ -157,6 +157,19 @@ void vv_zr_array_release(zr_array *a);
 vv_status zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uint64_t max,
                        unsigned char **out, size_t *n, uint64_t *size, int *missing);
 
+/* The object @p key of the store (beneath a->root, not leading out of
+ * a->real) parsed as JSON (a json_t *, a new reference; at most
+ * ZR_JSON_MAX bytes); NULL with the error set (naming @p name), or NULL
+ * with *s VV_OK when the object is absent and @p optional. */
+void *zr_load_json(const zr_array *a, const char *key, const char *name, int optional,
+                   vv_status *s);
+
+/* The refusal of a group that is not an image (zarr_meta.c): an HCS
+ * plate, a well or a labels group, whose metadata @p attrs (a json_t *,
+ * from file @p md) names; the error says which path to open instead.
+ * VV_OK (nothing set) when @p attrs names none of them. */
+vv_status zr_refuse_group(const char *root, void *attrs, const char *md);
+
 /* Zarr v3 (zarr3.c): the array metadata @p j of zarr.json into @p a;
  * errors name "zarr.json" and the field. */
 vv_status zr3_parse_array(zr_array *a, void *j);

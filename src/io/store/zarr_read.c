@@ -153,6 +153,14 @@ zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uin
 /* The object @p key of the store loaded as JSON (at most ZR_JSON_MAX
  * bytes); NULL with the error set (naming @p name), or NULL without an
  * error when the object is absent and @p optional. */
+static json_t *load_json(const zr_array *a, const char *key, const char *name, int optional,
+                         vv_status *s);
+
+void *
+zr_load_json(const zr_array *a, const char *key, const char *name, int optional, vv_status *s) {
+    return load_json(a, key, name, optional, s);
+}
+
 static json_t *
 load_json(const zr_array *a, const char *key, const char *name, int optional, vv_status *s) {
     unsigned char *b = NULL;
@@ -382,7 +390,11 @@ root_metadata(const zr_array *a, json_t **za, const char **md) {
         json_t *ome = json_object_get(at, "ome");
         /* NGFF 0.5 keeps its metadata under "ome"; drafts put it beside */
         json_t *m = json_object_get(ome, "multiscales") ? ome : at;
-        if (!json_object_get(m, "multiscales"))
+        json_t *g = json_is_object(ome) ? ome : at;
+        if (!json_object_get(m, "multiscales") &&
+            (s = zr_refuse_group(a->root, g, "zarr.json")) != VV_OK)
+            ; /* a plate, a well, a labels group: the path to open instead */
+        else if (!json_object_get(m, "multiscales"))
             s = vv_error_set(VV_ERR_FORMAT, "zarr.json: a group without attributes.ome.multiscales "
                                             "(not an OME-Zarr image)");
         else
@@ -414,6 +426,13 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         return s;
     a->zarr_format = strcmp(md, "zarr.json") ? 2 : 3; /* the levels' format */
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
+    if (za && !json_object_get(za, "multiscales") &&
+        (s = zr_refuse_group(root, za, md)) != VV_OK) { /* a v2 plate, well, labels group */
+        json_decref(za);
+        return s;
+    }
+    if (info && za && json_is_object(json_object_get(za, "image-label")))
+        info->is_label = 1;
     snprintf(a->dir, sizeof a->dir, "%s", root);
     json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
     json_t *dsl = ms ? json_object_get(ms, "datasets") : NULL;
@@ -990,8 +1009,16 @@ file_head(const char *dir, const char *name, char *head, size_t cap) {
     return 1;
 }
 
-/* A folder with a .zarray, or a .zattrs naming multiscales, or a Zarr v3
- * zarr.json of an array or of a group naming multiscales. */
+/* 1 when the metadata @p buf names an HCS plate, a well or a labels
+ * group (opened to say which path to open instead; zarr_meta.c). */
+static int
+ome_group_key(const char *buf) {
+    return strstr(buf, "\"plate\"") || strstr(buf, "\"well\"") || strstr(buf, "\"labels\"");
+}
+
+/* A folder with a .zarray, or a .zattrs naming multiscales (or a plate, a
+ * well, labels), or a Zarr v3 zarr.json of an array or of a group naming
+ * them. */
 int
 vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
     if (!p->is_dir || deep)
@@ -1014,9 +1041,13 @@ vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
             while (*nt == ' ' || *nt == '\t' || *nt == '\n' || *nt == '\r' || *nt == ':')
                 nt++;
         }
-        yes = nt && (!strncmp(nt, "\"array\"", 7) || strstr(buf, "\"multiscales\""));
+        /* a long plate's wells may push node_type past the head */
+        yes = nt ? !strncmp(nt, "\"array\"", 7) || strstr(buf, "\"multiscales\"") ||
+                       ome_group_key(buf)
+                 : strstr(buf, "\"zarr_format\"") == NULL && strstr(buf, "\"ome\"") &&
+                       ome_group_key(buf);
     } else if (file_head(p->path, ".zattrs", buf, 4096))
-        yes = strstr(buf, "\"multiscales\"") != NULL;
+        yes = strstr(buf, "\"multiscales\"") != NULL || ome_group_key(buf);
     free(buf);
     return yes;
 }
