@@ -49,7 +49,10 @@ t0=$(date +%s)
 
 # 1. the wheel
 rm -rf "$out/dist"
-if ! SKBUILD_BUILD_DIR="$out/skbuild" CMAKE_BUILD_PARALLEL_LEVEL="${VV_WHEEL_JOBS:-2}" \
+# Make, not Ninja, whether or not ninja-build is installed: the same build
+# everywhere, and the kept build folder never meets another generator
+if ! SKBUILD_BUILD_DIR="$out/skbuild" CMAKE_GENERATOR="Unix Makefiles" \
+  CMAKE_BUILD_PARALLEL_LEVEL="${VV_WHEEL_JOBS:-2}" \
   "$tools/bin/python" -m pip wheel --disable-pip-version-check --no-build-isolation --no-deps \
   --no-index -w "$out/dist" "$src" >"$out/build.log" 2>&1; then
   tail -n 60 "$out/build.log"
