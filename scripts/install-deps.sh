@@ -19,9 +19,13 @@
 #          PyPI packages of scripts/requirements-pypi.txt, pinned (zarr 3, tensorstore, ome-zarr,
 #          ngff-zarr, ome-zarr-models: Zarr v3 / OME-Zarr 0.5 writers and readers to check ours
 #          against); remade when that file changes. Never installs into the system Python.
+#   test also makes .venv-wheel: scikit-build-core, cffi, numpy, pytest and auditwheel of
+#          scripts/requirements-wheel.txt, pinned, with their wheels in .venv-wheel/wheelhouse
+#          (the pip wheel's test, test_python_wheel, builds and installs offline from them)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 venv=0
+wheelvenv=0
 
 pkgs=(build-essential cmake pkg-config libwebsockets-dev libturbojpeg0-dev libteem-dev libnifti2-dev libjansson-dev libblosc-dev libzstd-dev libbz2-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
@@ -35,7 +39,7 @@ for what in "$@"; do
     test) pkgs+=(libcmocka-dev openssl chromium chromium-driver python3-selenium python3-websockets ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-h5py python3-vtk9 libgdcm-tools python3-scipy teem-apps
                  python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert
                  mesa-vulkan-drivers vulkan-validationlayers graphviz python3-venv)
-          venv=1 ;;
+          venv=1 wheelvenv=1 ;;
     fuzz) pkgs+=(clang-14 libclang-rt-14-dev libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers python3-venv)
            venv=1 ;;
@@ -71,5 +75,23 @@ if [ "$venv" = 1 ]; then
     /usr/bin/python3 -m venv "$root/.venv"
     "$root/.venv/bin/python" -m pip install -q --disable-pip-version-check --no-input -r "$req"
     echo "$want" >"$root/.venv/requirements.sha256"
+  fi
+fi
+
+# The pip wheel's build and test tools, in .venv-wheel, and their wheels in
+# .venv-wheel/wheelhouse (the fresh environment the test installs the wheel
+# into takes cffi, numpy and pytest from there, without network).
+if [ "$wheelvenv" = 1 ]; then
+  req="$root/scripts/requirements-wheel.txt"
+  want="$(sha256sum "$req" | cut -d' ' -f1)"
+  if [ "$(cat "$root/.venv-wheel/requirements.sha256" 2>/dev/null)" != "$want" ]; then
+    echo "install-deps.sh: making .venv-wheel from scripts/requirements-wheel.txt" >&2
+    rm -rf "$root/.venv-wheel"
+    /usr/bin/python3 -m venv "$root/.venv-wheel"
+    "$root/.venv-wheel/bin/python" -m pip download -q --disable-pip-version-check --no-input \
+      --no-deps --only-binary=:all: -d "$root/.venv-wheel/wheelhouse" -r "$req"
+    "$root/.venv-wheel/bin/python" -m pip install -q --disable-pip-version-check --no-input \
+      --no-index --find-links "$root/.venv-wheel/wheelhouse" -r "$req"
+    echo "$want" >"$root/.venv-wheel/requirements.sha256"
   fi
 fi

@@ -139,8 +139,10 @@ typedef struct vv_input_devinfo_db vv_input_devinfo_db;
  * Loads the information base. Each directory in @p dirs (n_dirs entries, may
  * be 0; NULL entries skipped) is read in order for "<kind>.json" files; a
  * later directory overrides an earlier one kind by kind. With @p n_dirs == 0
- * the default search is used: the installed share/volvis/devices, then
- * ~/.config/volvis/devices, then $VOLVIS_DEVICE_DIR (missing directories are
+ * the default search is used: the installed share/volvis/devices (the
+ * configured one, then ../share/volvis/devices from the library's or the
+ * program's own folder, so a moved install such as the pip wheel finds its
+ * own), then ~/.config/volvis/devices, then $VOLVIS_DEVICE_DIR (missing directories are
  * skipped). Errors: VV_ERR_FORMAT for a malformed file (with file, line and
  * column), VV_ERR_NOMEM. The caller frees with vv_input_devinfo_db_free.
  */

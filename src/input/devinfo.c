@@ -3,7 +3,10 @@
  * kind (share/devices/<kind>.json), read with Jansson over built-in
  * defaults, so that a missing file still leaves a usable entry.
  */
+#define _GNU_SOURCE
+#include <dlfcn.h>
 #include <jansson.h>
+#include <link.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -319,6 +322,43 @@ load_dir(vv_input_devinfo_db *db, const char *dir) {
     return VV_OK;
 }
 
+/* An object of the library's own code's file: dladdr names the file it was
+ * loaded from (libvolvis.so, or the program the library is linked into). */
+static const char devinfo_anchor = 0;
+
+/* The file this code was loaded from: a shared object's path, or for the
+ * main program (whose link map has the name "", and whose dladdr name is
+ * argv[0], not a path when found through PATH) the program itself. */
+static const char *
+self_file(Dl_info *di) {
+    struct link_map *map = NULL;
+    if (!dladdr1(&devinfo_anchor, di, (void **)&map, RTLD_DL_LINKMAP))
+        return NULL;
+    if (!map || !map->l_name || !map->l_name[0])
+        return "/proc/self/exe";
+    return di->dli_fname;
+}
+
+/* share/volvis/devices beside the library's prefix: <dir of the object this
+ * code was loaded from>/../share/volvis/devices, so that a relocated install
+ * (the pip wheel) finds its own files. 1 when it fits @p buf. */
+static int
+relative_datadir(char *buf, size_t cap) {
+    Dl_info di;
+    const char *f;
+    char *obj = NULL;
+    if (!(f = self_file(&di)) || !(obj = realpath(f, NULL)))
+        return 0;
+    char *slash = strrchr(obj, '/');
+    int ok = 0;
+    if (slash) {
+        *slash = '\0';
+        ok = (size_t)snprintf(buf, cap, "%s/../share/volvis/devices", obj) < cap;
+    }
+    free(obj);
+    return ok;
+}
+
 vv_status
 vv_input_devinfo_db_load(vv_input_devinfo_db **out, const char *const *dirs, int n_dirs) {
     *out = NULL;
@@ -333,7 +373,14 @@ vv_input_devinfo_db_load(vv_input_devinfo_db **out, const char *const *dirs, int
             if (dirs[i])
                 s = load_dir(db, dirs[i]);
     } else {
+#ifdef VV_DEVICE_DATADIR
+        /* the configured install folder (absent from relocatable builds) */
         s = load_dir(db, VV_DEVICE_DATADIR);
+#endif
+        /* then the one relative to the library, where it was moved to */
+        char rel[4096];
+        if (s == VV_OK && relative_datadir(rel, sizeof rel))
+            s = load_dir(db, rel);
         const char *home = getenv("HOME");
         if (s == VV_OK && home) {
             char p[1024];

@@ -10,6 +10,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <link.h>
 #include <poll.h>
 #include <pthread.h>
 #include <signal.h>
@@ -313,6 +314,19 @@ sbx_recv(int sock, void *buf, size_t cap, int *passed) {
  * loaded from (libvolvis.so, or the program the library is linked into). */
 static const char reader_anchor = 0;
 
+/* The file this code was loaded from: a shared object's path, or for the
+ * main program (whose link map has the name "", and whose dladdr name is
+ * argv[0], not a path when found through PATH) the program itself. */
+static const char *
+self_file(Dl_info *di) {
+    struct link_map *map = NULL;
+    if (!dladdr1(&reader_anchor, di, (void **)&map, RTLD_DL_LINKMAP))
+        return NULL;
+    if (!map || !map->l_name || !map->l_name[0])
+        return "/proc/self/exe";
+    return di->dli_fname;
+}
+
 /* The volvis-reader to start into @p buf (PATH_MAX bytes): $VOLVIS_READER,
  * else the one beside the object this code was loaded from (libvolvis.so,
  * or the program the library is linked into), else in ../libexec from
@@ -330,8 +344,9 @@ reader_path(char *buf, size_t cap, char *tried, size_t tcap) {
     char cand[4][PATH_MAX];
     int n = 0;
     Dl_info di;
+    const char *f;
     char *obj = NULL;
-    if (dladdr(&reader_anchor, &di) && di.dli_fname && (obj = realpath(di.dli_fname, NULL))) {
+    if ((f = self_file(&di)) && (obj = realpath(f, NULL))) {
         char *slash = strrchr(obj, '/');
         if (slash && strlen(obj) + 32 < PATH_MAX) {
             *slash = '\0';

@@ -25,6 +25,13 @@ if not any(pathlib.Path(p, "volvis").exists() for p in sys.path if p):
 
 import volvis  # noqa: E402
 
+# test_python_wheel (tests/python/wheel.sh): the package must be the wheel
+# installed in that environment, never a build tree's
+if os.environ.get("VV_EXPECT_PREFIX"):
+    _want = pathlib.Path(os.environ["VV_EXPECT_PREFIX"]).resolve()
+    if _want not in pathlib.Path(volvis.__file__).resolve().parents:
+        raise RuntimeError("volvis imported from %s, not from %s" % (volvis.__file__, _want))
+
 SANITIZER = bool(os.environ.get("VV_SANITIZER"))
 
 
