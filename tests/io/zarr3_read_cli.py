@@ -31,7 +31,6 @@ numpy (the NRRD read back here);
   not hold, a dataset path that leaves the store: one line naming the store,
   a non-zero exit, no output.
 """
-import gzip
 import json
 import os
 import shutil
@@ -47,46 +46,18 @@ except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_common import Checks, read_nrrd, run  # noqa: E402
+
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
 shutil.rmtree(OUT, ignore_errors=True)
 os.makedirs(OUT)
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
+check = Checks()
+failures = check.failures
 
 
 def volvis(*args):
-    return subprocess.run([VOLVIS, *args], capture_output=True, text=True)
-
-
-NRRD_TYPES = {"unsigned char": "u1", "signed char": "i1", "unsigned short": "u2", "short": "i2",
-              "unsigned int": "u4", "int": "i4", "float": "f4", "double": "f8"}
-
-
-def read_nrrd(path):
-    """(voxels z, y, x; spacing x, y, z; origin x, y, z) of a NRRD VolVis wrote."""
-    with open(path, "rb") as f:
-        raw = f.read()
-    head, _, body = raw.partition(b"\n\n")
-    h = {}
-    for ln in head.decode().splitlines()[1:]:
-        if ln.startswith("#") or ": " not in ln:
-            continue
-        k, v = ln.split(": ", 1)
-        h[k] = v
-    sizes = [int(x) for x in h["sizes"].split()]
-    dt = np.dtype(("<" if h.get("endian", "little") == "little" else ">") + NRRD_TYPES[h["type"]])
-    if h["encoding"] == "gzip":
-        body = gzip.decompress(body)
-    arr = np.frombuffer(body, dtype=dt, count=int(np.prod(sizes))).reshape(sizes[::-1])
-    dirs = [[float(c) for c in d.strip("()").split(",")] for d in h["space directions"].split()]
-    spacing = [float(np.linalg.norm(d)) for d in dirs]
-    origin = [float(c) for c in h.get("space origin", "(0,0,0)").strip("()").split(",")]
-    return arr, spacing, origin
+    return run(VOLVIS, *args)
 
 
 def read_back(store, *args):

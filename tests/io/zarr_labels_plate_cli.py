@@ -22,7 +22,6 @@ OME-NGFF 0.4 (Zarr v2) and 0.5 (Zarr v3), ome-zarr-py writes:
   labels (257), a well folder that is a link out of the store: refused by
   `volvis info` and `volvis render` in one line naming the file and field.
 """
-import gzip
 import json
 import os
 import shutil
@@ -40,40 +39,23 @@ except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_common import Checks, run  # noqa: E402
+from cli_common import read_nrrd as read_voxels_spacing_origin  # noqa: E402
+
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
 shutil.rmtree(OUT, ignore_errors=True)
 os.makedirs(OUT)
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
+check = Checks()
+failures = check.failures
 
 
 def volvis(*args):
-    return subprocess.run([VOLVIS, *args], capture_output=True, text=True)
-
-
-NRRD_TYPES = {"unsigned char": "u1", "signed char": "i1", "unsigned short": "u2", "short": "i2",
-              "unsigned int": "u4", "int": "i4", "float": "f4", "double": "f8"}
+    return run(VOLVIS, *args)
 
 
 def read_nrrd(path):
-    with open(path, "rb") as f:
-        raw = f.read()
-    head, _, body = raw.partition(b"\n\n")
-    h = {}
-    for ln in head.decode().splitlines()[1:]:
-        if ": " in ln and not ln.startswith("#"):
-            k, v = ln.split(": ", 1)
-            h[k] = v
-    sizes = [int(x) for x in h["sizes"].split()]
-    dt = np.dtype(("<" if h.get("endian", "little") == "little" else ">") + NRRD_TYPES[h["type"]])
-    if h["encoding"] == "gzip":
-        body = gzip.decompress(body)
-    return np.frombuffer(body, dtype=dt, count=int(np.prod(sizes))).reshape(sizes[::-1])
+    return read_voxels_spacing_origin(path)[0]
 
 
 def read_back(store):
