@@ -12,7 +12,7 @@ encoded inner chunk as "raw" bytes (13, u16 length, bytes), empty inner
 chunks and absent chunk files as such (11), so the harness rebuilds the
 shard indexes around the reference encoder's chunks. A second seed of each
 store appends the real zarr.json after a line "--JSON--" (merged into the
-generated one). The script checks that the header it wrote describes the
+generated one) and asks for vv_open whole too. The script checks that the header it wrote describes the
 store (its mapping is the harness's parse_header, kept small enough that
 the harness's caps change nothing). Written into OUTDIR (default
 tests/fuzz/corpus/zarr3) as ref-<writer>-<name>[-json].
@@ -34,7 +34,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = sys.argv[1] if len(sys.argv) > 1 else os.path.join(HERE, "corpus", "zarr3")
 DTYPES = ["bool", "uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64",
           "int64", "uint64", "float16"]
-MAXSIDE = {2: 64, 3: 24, 4: 10, 5: 6}
+MAXSIDE = {2: 48, 3: 16, 4: 8, 5: 6}
 CNAMES = ["lz4", "zstd", "blosclz", "zlib", "lz4hc"]
 SHUFFLES = ["noshuffle", "shuffle", "bitshuffle"]
 B2B = {"gzip": 0, "zstd": 1, "blosc": 2, "crc32c": 3}
@@ -198,7 +198,7 @@ def seeds_of(root, name):
     with open(os.path.join(OUT, f"ref-{name}"), "wb") as f:
         f.write(seed)
     with open(os.path.join(OUT, f"ref-{name}-json"), "wb") as f:
-        f.write(seed + b"\n--JSON--\n" + json.dumps(meta0, separators=(",", ":")).encode())
+        f.write(head[:42] + bytes([head[42] | 8]) + seed[43:] + b"\n--JSON--\n" + json.dumps(meta0, separators=(",", ":")).encode())
 
 
 rng = np.random.default_rng(78)
