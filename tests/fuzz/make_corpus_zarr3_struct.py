@@ -317,4 +317,44 @@ with tempfile.TemporaryDirectory() as tmp:
             {"name": x, "type": "space"} for x in "zyx"], "datasets": ds}]}
         seeds_of(root, "zarr-python-" + name)
         n += 2
+# hand-made: zarr.json refusals only the merged JSON can make (the header
+# always describes a valid chain), over the zarr-python "shard" seed
+B = {"name": "bytes", "configuration": {"endian": "little"}}
+G = {"name": "gzip", "configuration": {"level": 1}}
+
+
+def nest(k):
+    c = [B]
+    for _ in range(k):
+        c = [{"name": "sharding_indexed", "configuration": {
+            "chunk_shape": [4, 6, 6], "codecs": c, "index_codecs": [B]}}]
+    return c
+
+
+HAND = {
+    "order": {"codecs": [G, B]},
+    "two-a2b": {"codecs": [B, B]},
+    "transpose-late": {"codecs": [B, {"name": "transpose", "configuration": {
+        "order": [0, 1, 2]}}]},
+    "many-codecs": {"codecs": [B] + [{"name": "crc32c"}] * 9},
+    "nest-5": {"codecs": nest(5)},
+    "inner-many": {"shape": [64, 64, 128], "chunk_grid": {"name": "regular", "configuration": {
+        "chunk_shape": [64, 64, 128]}}, "codecs": [{"name": "sharding_indexed", "configuration": {
+            "chunk_shape": [1, 1, 1], "codecs": [B], "index_codecs": [B]}}]},
+    "shard-wrapped": {"codecs": nest(1) + [G]},
+    "index-gzip": {"codecs": [{"name": "sharding_indexed", "configuration": {
+        "chunk_shape": [2, 3, 3], "codecs": [B], "index_codecs": [B, G]}}]},
+    "index-sharded": {"codecs": [{"name": "sharding_indexed", "configuration": {
+        "chunk_shape": [2, 3, 3], "codecs": [B], "index_codecs": nest(1)}}]},
+    "blosc-cname": {"codecs": [B, {"name": "blosc", "configuration": {"cname": "nope"}}]},
+    "codec-unknown": {"codecs": [B, {"name": "bz2"}]},
+    "storage-transformers": {"storage_transformers": [{"type": "indexed"}]},
+    "fill-hex": {"fill_value": "0x12zz"},
+    "fill-null": {"fill_value": None},
+}
+base = open(os.path.join(OUT, "ref-zarr-python-shard"), "rb").read()
+for name, merge in HAND.items():
+    with open(os.path.join(OUT, f"hand-{name}"), "wb") as f:
+        f.write(base + b"\n--JSON--\n" + json.dumps(merge, separators=(",", ":")).encode())
+    n += 1
 print(f"wrote {n} seeds to {OUT}")
