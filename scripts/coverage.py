@@ -40,7 +40,7 @@ PARSERS = [
     "src/io/grid/grid_vtk.c", "src/io/grid/grid_plot3d.c", "src/io/grid/grid_dx.c",
     "src/io/volume/raw.c", "src/compress/vvc_format.c", "src/io/store/vvb.c",
     "src/io/store/vvb_read.c", "src/io/store/bricked.c", "src/io/store/zarr_read.c",
-    "src/io/store/zarr_pyramid.c", "src/io/store/bdv_xml.c",
+    "src/io/store/zarr_pyramid.c", "src/io/store/zarr3.c", "src/io/store/bdv_xml.c",
     "src/io/store/hdf5_pyramid.c", "src/io/store/pyramid_open.c",
     "src/io/store/pyramid_load.c", "src/scene/scene.c", "src/scene/scene_appearance.c",
     "src/scene/scene_channels.c", "src/scene/scene_fields.c",
