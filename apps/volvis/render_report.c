@@ -3,7 +3,8 @@
  * size and time, and for a World drawn out of core what each object's
  * source read -- a bricked file's bricks, a pyramid's nodes and chunks by
  * level -- and the cache's peak, from the sources' own counts
- * (vv_source_stats_get).
+ * (vv_source_stats_get); objects that share a source (one file named
+ * twice in a scene) are counted once.
  */
 #include <stdio.h>
 #include <string.h>
@@ -81,6 +82,16 @@ cli_render_report(const cli_render_args *r, const vv_world *w, const vv_image *i
             continue;
         if (!o->source) {
             printf("  %s: in memory\n", o->name);
+            continue;
+        }
+        /* objects naming one file out of core share its source (the
+         * scene's table): its counts are the file's, printed once */
+        const vv_object *first = NULL;
+        for (int j = 0; j < i && !first; j++)
+            if (w->objects[j]->visible && w->objects[j]->source == o->source)
+                first = w->objects[j];
+        if (first) {
+            printf("  %s: the file of %s, one source (counted there)\n", o->name, first->name);
             continue;
         }
         vv_source_stats st;
