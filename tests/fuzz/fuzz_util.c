@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "volvis/volvis.h"
@@ -159,4 +160,30 @@ fuzz_read_source(vv_source *s) {
     fuzz_check_status(st);
     if (st == VV_OK)
         fuzz_check_volume(p);
+}
+
+static void
+rm_tree_at(const char *path, int depth) {
+    DIR *d = depth < 16 ? opendir(path) : NULL;
+    if (d) {
+        struct dirent *e;
+        char p[1024];
+        while ((e = readdir(d)) != NULL) {
+            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+                continue;
+            snprintf(p, sizeof p, "%s/%s", path, e->d_name);
+            struct stat st;
+            if (lstat(p, &st) == 0 && S_ISDIR(st.st_mode))
+                rm_tree_at(p, depth + 1);
+            else
+                unlink(p);
+        }
+        closedir(d);
+    }
+    rmdir(path);
+}
+
+void
+fuzz_rm_tree(const char *path) {
+    rm_tree_at(path, 0);
 }

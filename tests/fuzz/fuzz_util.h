@@ -62,6 +62,11 @@ void fuzz_read_source(struct vv_source *s);
 /** The private temporary folder. */
 const char *fuzz_dir(void);
 
+/** Removes everything beneath folder @p path (depth-first, at most 16 folders
+ *  deep, links not followed), then the folder; errors are ignored (what a
+ *  harness cannot remove, the next input's removal tries again). */
+void fuzz_rm_tree(const char *path);
+
 /**
  * Splits @p data at the first occurrence of @p sep (a line such as
  * "\n--DATA--\n"): the part before goes to *a, the part after to *b; when

@@ -26,7 +26,6 @@
  * store never reaches the DICOM row's GDCM), a small box of every level and the proxy of
  * the coarsest read from what opened; in a cache of the harness's own.
  */
-#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdint.h>
@@ -49,28 +48,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 #define ZARR_MAX_NAME 128
 
 static const char marker[] = "--FILE ";
-
-/* Removes everything beneath folder @p path (depth-first), then the folder. */
-static void
-rm_tree(const char *path, int depth) {
-    DIR *d = depth < 16 ? opendir(path) : NULL;
-    if (d) {
-        struct dirent *e;
-        char p[1024];
-        while ((e = readdir(d)) != NULL) {
-            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
-                continue;
-            snprintf(p, sizeof p, "%s/%s", path, e->d_name);
-            struct stat st;
-            if (lstat(p, &st) == 0 && S_ISDIR(st.st_mode))
-                rm_tree(p, depth + 1);
-            else
-                unlink(p);
-        }
-        closedir(d);
-    }
-    rmdir(path);
-}
 
 /* 1 when @p name (NUL-terminated) is a name the container may create. */
 static int
@@ -208,7 +185,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     }
     char root[512];
     snprintf(root, sizeof root, "%s/in.zarr", fuzz_dir());
-    rm_tree(root, 0); /* whatever a previous input left */
+    fuzz_rm_tree(root); /* whatever a previous input left */
     int ask[3];
     build_store(root, data, size, ask);
     vv_load_options lo;
@@ -229,6 +206,6 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     }
     open_store(root, VV_OPEN_WHOLE, ask, cache);
     open_store(root, VV_OPEN_OUT_OF_CORE, ask, cache);
-    rm_tree(root, 0);
+    fuzz_rm_tree(root);
     return 0;
 }

@@ -61,7 +61,6 @@
  * when the header says, whole, in a cache of the harness's own with a small budget; it lies in
  * the harness's private folder (/dev/shm) and is removed after each input.
  */
-#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -713,27 +712,6 @@ write_array(const spec *s, reader *r, const char *dir, const uint64_t *shape, js
 }
 
 static void
-rm_tree(const char *path, int depth) {
-    DIR *d = depth < 16 ? opendir(path) : NULL;
-    if (d) {
-        struct dirent *e;
-        char p[1024];
-        while ((e = readdir(d)) != NULL) {
-            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
-                continue;
-            snprintf(p, sizeof p, "%s/%s", path, e->d_name);
-            struct stat st;
-            if (lstat(p, &st) == 0 && S_ISDIR(st.st_mode))
-                rm_tree(p, depth + 1);
-            else
-                unlink(p);
-        }
-        closedir(d);
-    }
-    rmdir(path);
-}
-
-static void
 open_store(const char *root, vv_open_mode mode, int level, vv_cache *cache) {
     vv_open_options oo;
     vv_open_options_init(&oo);
@@ -780,7 +758,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     parse_header(&r, &s);
     char root[512], dir[600];
     snprintf(root, sizeof root, "%s/in.zarr", fuzz_dir());
-    rm_tree(root, 0);
+    fuzz_rm_tree(root);
     if (mkdir(root, 0700) != 0) {
         perror("fuzz: mkdir store");
         abort();
@@ -820,6 +798,6 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (s.whole) /* mostly vv_ome_zarr_read's path again: not every input */
         open_store(root, VV_OPEN_WHOLE, level, cache);
     open_store(root, VV_OPEN_OUT_OF_CORE, level, cache);
-    rm_tree(root, 0);
+    fuzz_rm_tree(root);
     return 0;
 }
