@@ -1,5 +1,5 @@
 """Helpers shared by the CLI tests of tests/io that the pinned .venv runs
-(zarr3_read_cli.py, zarr_labels_plate_cli.py): the checks and their
+(zarr3_read_cli.py, zarr3_write_cli.py, zarr_labels_plate_cli.py): the checks and their
 summary, running volvis, and reading back a NRRD VolVis wrote."""
 import gzip
 import subprocess

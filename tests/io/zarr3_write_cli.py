@@ -56,17 +56,15 @@ except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (the .venv of scripts/install-deps.sh test)")
     sys.exit(77)
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_common import Checks  # noqa: E402
+
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
 HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
 shutil.rmtree(OUT, ignore_errors=True)
 os.makedirs(OUT)
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
+check = Checks()
+failures = check.failures
 
 
 def volvis(*args, env=None):
