@@ -391,16 +391,22 @@ typedef enum vv_ome_zarr_kind {
     VV_OME_ZARR_LABELS     /**< an image's labels group: open one (labels/NAME) */
 } vv_ome_zarr_kind;
 
+/**
+ * What vv_ome_zarr_contents_get found in an OME-Zarr group (OME-NGFF 0.4
+ * and 0.5: "image-label", "plate" and "well" metadata). Owned by the
+ * caller; its arrays are the library's until vv_ome_zarr_contents_clear.
+ * Not shared between threads.
+ */
 typedef struct vv_ome_zarr_contents {
     vv_ome_zarr_kind kind;
     int is_label;              /**< an image with image-label metadata */
     int n_labels;              /**< label images (an image's labels/, or a labels group) */
     vv_ome_zarr_label *labels; /**< n_labels entries (vv_ome_zarr_contents_clear frees) */
     char plate_name[VV_OME_ZARR_NAME_MAX];
-    int n_rows, n_columns; /**< a plate's rows and columns */
-    int field_count;       /**< a plate's field_count (0: not given) */
-    int n_acquisitions;
-    int n_wells;
+    int n_rows, n_columns;   /**< a plate's rows and columns */
+    int field_count;         /**< a plate's field_count (0: not given) */
+    int n_acquisitions;      /**< a plate's acquisitions listed */
+    int n_wells;             /**< wells listed (a plate's, or 1 for a well) */
     vv_ome_zarr_well *wells; /**< n_wells entries (a well: one, path "") */
 } vv_ome_zarr_contents;
 
