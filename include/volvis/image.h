@@ -50,6 +50,15 @@ void vv_image_free(vv_image *img);
 void vv_image_clear(vv_image *img, float r, float g, float b, float a);
 
 /**
+ * Rows @p y0 <= y < @p y1, columns @p x0 <= x < @p x1 of @p img as 8-bit
+ * RGBX in @p out (4 * img->width bytes a row, the whole image's layout):
+ * each component (uint8)(clamp(v * 255 + 0.5, 0, 255)), gamma 1, alpha in
+ * X. The conversion of vv_pixels8 (render.h). Thread-safe for disjoint
+ * rectangles; does no allocation.
+ */
+void vv_image_rect_to_rgbx8(const vv_image *img, int x0, int y0, int x1, int y1, uint8_t *out);
+
+/**
  * Converts to 8-bit, @p channels per pixel (3: RGB, 4: RGBA), rows top to
  * bottom, into @p out (width * height * channels bytes, caller-owned).
  * gamma <= 0 is taken as 1.

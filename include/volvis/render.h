@@ -110,6 +110,24 @@ void vv_lod_init(vv_lod *lod);
 
 #define VV_SOURCES_MAX 16 /**< visible volume objects out of core one frame draws */
 
+/**
+ * Where a render also writes its frame as 8-bit pixels (`volvis serve`'s
+ * JPEG input): RGBX, 4 bytes a pixel, rows top to bottom, width * 4 bytes
+ * a row, each component of the float image as (uint8)(clamp(v * 255 +
+ * 0.5, 0, 255)) (gamma 1; X is the alpha). The buffer is the caller's
+ * (4 * width * height bytes, width and height those of the view). A
+ * renderer whose tiles write final pixels converts each tile on the
+ * worker thread that drew it, while the tile is in that core's cache (the
+ * frame runner's `image`); for the others vv_renderer_render converts the
+ * finished image. Either way, after a successful render the buffer holds
+ * the frame and `converted_in_tiles` says which way it went.
+ */
+typedef struct vv_pixels8 {
+    uint8_t *rgbx;          /**< 4 * width * height bytes, the caller's */
+    int width, height;      /**< its size, pixels: the view's */
+    int converted_in_tiles; /**< out: 1 by the tiles that drew them, 0 after the frame */
+} vv_pixels8;
+
 /** Options of one render call. */
 typedef struct vv_render_options {
     int threads;          /**< <= 0: vv_threads_get() */
@@ -136,9 +154,13 @@ typedef struct vv_render_options {
      * VV_ERR_UNSUPPORTED (what the CLI reports).
      */
     int proxy_fallback;
+    /** NULL, or where a successful vv_renderer_render also leaves the frame
+     *  in 8 bits (vv_pixels8); its size must be the view's. */
+    vv_pixels8 *pixels8;
 } vv_render_options;
 
-/** threads 0, quality 2, no progress callback, no stats, no lod, no proxy fallback. */
+/** threads 0, quality 2, no progress callback, no stats, no lod, no proxy fallback, no
+ *  8-bit pixels. */
 void vv_render_options_init(vv_render_options *o);
 
 /* ---- typed option tables ------------------------------------------------ */

@@ -70,6 +70,24 @@ vv_image_to_8bit(const vv_image *img, int channels, double gamma, uint8_t *out) 
     }
 }
 
+void
+vv_image_rect_to_rgbx8(const vv_image *img, int x0, int y0, int x1, int y1, uint8_t *out) {
+    const size_t row = 4 * (size_t)img->width;
+    const size_t n = 4 * (size_t)(x1 - x0);
+    for (int y = y0; y < y1; y++) {
+        /* one contiguous loop the compiler vectorizes (lrint per
+         * component, as vv_image_to_8bit's, is 4 times slower) */
+        const float *a = img->rgba + (size_t)y * row + 4 * (size_t)x0;
+        uint8_t *b = out + (size_t)y * row + 4 * (size_t)x0;
+        for (size_t i = 0; i < n; i++) {
+            float v = a[i] * 255.0f + 0.5f;
+            v = v > 0 ? v : 0;
+            v = v < 255 ? v : 255;
+            b[i] = (uint8_t)v;
+        }
+    }
+}
+
 double
 vv_image_psnr(const vv_image *a, const vv_image *b) {
     if (a->width != b->width || a->height != b->height)

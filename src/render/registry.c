@@ -713,6 +713,18 @@ proxies_in_memory(const vv_world *w, vv_world **out) {
     return s;
 }
 
+/* @p img as 8-bit RGBX in p8 (vv_pixels8's conversion), rows on @p threads threads. */
+static void
+pixels8_of(const vv_image *img, vv_pixels8 *p8, int threads) {
+    const int nt = threads > 0 ? threads : vv_threads_get();
+#pragma omp parallel for schedule(static) num_threads(nt)
+    for (int y = 0; y < img->height; y++)
+        vv_image_rect_to_rgbx8(img, 0, y, img->width, y + 1, p8->rgbx);
+}
+
+static vv_status render_method(vv_renderer *r, const vv_world *world, const vv_view *view,
+                               const vv_render_options *opt, vv_image *out);
+
 vv_status
 vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
                    const vv_render_options *opt, vv_image *out) {
@@ -726,6 +738,30 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
     if (out->width != view->width || out->height != view->height)
         return vv_error_set(VV_ERR_INVALID, "render: image is %d x %d but the view is %d x %d",
                             out->width, out->height, view->width, view->height);
+    vv_pixels8 *p8 = opt->pixels8;
+    if (p8 && (!p8->rgbx || p8->width != view->width || p8->height != view->height))
+        return vv_error_set(VV_ERR_INVALID,
+                            "render: 8-bit pixels of %d x %d but the view is %d x %d", p8->width,
+                            p8->height, view->width, view->height);
+    if (p8) {
+        /* the method's own frame converts its tiles (frame runner); the
+         * drivers' composites and other methods' frames are converted here */
+        p8->converted_in_tiles = 0;
+        vv_status s = render_method(r, world, view, opt, out);
+        if (s == VV_OK && !p8->converted_in_tiles)
+            pixels8_of(out, p8, opt->threads);
+        return s;
+    }
+    return render_method(r, world, view, opt, out);
+}
+
+/* vv_renderer_render's work; opt->pixels8 reaches only the method's own
+ * whole frame of @p out. */
+static vv_status
+render_method(vv_renderer *r, const vv_world *world, const vv_view *view,
+              const vv_render_options *opt, vv_image *out) {
+    vv_render_options no8 = *opt;
+    no8.pixels8 = NULL;
     vv_status s = vv_renderer_check_world(&r->ops->info, world);
     vv_world *proxies = NULL;
     if (s == VV_OK && drv_world_out_of_core(world)) {
@@ -739,7 +775,7 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
         }
         lod->note[0] = '\0';
         drv_renderer dr;
-        s = drv_render_sources(drv_renderer_of(r, &dr), world, view, opt, lod, out);
+        s = drv_render_sources(drv_renderer_of(r, &dr), world, view, &no8, lod, out);
         if (s != VV_ERR_UNSUPPORTED || !opt->proxy_fallback)
             return s;
         /* the renderer, not the front end, falls back: the proxies in memory */
@@ -764,7 +800,7 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
         if (s == VV_OK && !r->stand_in)
             s = vv_renderer_new(&r->stand_in, stand_in);
         if (s == VV_OK)
-            s = vv_renderer_render(r->stand_in, draw, view, opt, out);
+            s = vv_renderer_render(r->stand_in, draw, view, &no8, out);
     } else if (s == VV_OK) {
         s = r->ops->render(r->state, world, view, opt, out);
     }

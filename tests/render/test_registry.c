@@ -817,6 +817,80 @@ test_stand_in(void **state) {
     vv_volume_free(v);
 }
 
+/* The frame in 8 bits (vv_pixels8): the ray caster's tiles convert what they
+ * drew, other methods' frames are converted after them; either way the
+ * bytes are the float frame's, rounded half up. */
+static void
+expect_rgbx(const vv_image *img, const uint8_t *rgbx) {
+    for (size_t i = 0; i < 4 * (size_t)img->width * img->height; i++) {
+        float v = img->rgba[i];
+        int want = v <= 0 ? 0 : v >= 1 ? 255 : (int)floorf(v * 255.0f + 0.5f);
+        if (rgbx[i] != want)
+            fail_msg("byte %zu: %d, want %d (%.6f)", i, rgbx[i], want, v);
+    }
+}
+
+static void
+test_pixels8(void **state) {
+    (void)state;
+    vv_volume *v = NULL;
+    const int dims[3] = {24, 20, 16};
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    unsigned char *d = v->data;
+    for (int k = 0; k < 16; k++)
+        for (int j = 0; j < 20; j++)
+            for (int i = 0; i < 24; i++) {
+                double r =
+                    sqrt((i - 12.0) * (i - 12.0) + (j - 10.0) * (j - 10.0) + (k - 8.0) * (k - 8.0));
+                d[(k * 20 + j) * 24 + i] = (unsigned char)(r < 9 ? 250 - 25 * r : 0);
+            }
+    vv_volume_update_range(v);
+    vv_default_scene_options o;
+    vv_default_scene_options_init(&o);
+    o.mode = VV_MODE_COMPOSITE;
+    o.width = 70; /* tiles cut at the edges */
+    o.height = 45;
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, v, &o));
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, 70, 45));
+    uint8_t *rgbx = malloc(4 * 70 * 45);
+    assert_non_null(rgbx);
+    const char *methods[] = {"raycast", "splat", "raytrace"};
+    for (int m = 0; m < 3; m++)
+        for (int q = 0; q <= 2; q += 2) { /* draft and final quality */
+            vv_renderer *r = NULL;
+            vt_ok(vv_renderer_new(&r, methods[m]));
+            vv_pixels8 p8 = {.rgbx = rgbx, .width = 70, .height = 45, .converted_in_tiles = -1};
+            vv_render_options ro;
+            vv_render_options_init(&ro);
+            ro.quality = q;
+            ro.pixels8 = &p8;
+            memset(rgbx, 0x5a, 4 * 70 * 45);
+            vt_ok(vv_renderer_render(r, w, &w->view, &ro, img));
+            /* only the ray caster's own tiles convert */
+            assert_int_equal(p8.converted_in_tiles, m == 0);
+            expect_rgbx(img, rgbx);
+            /* the same frame without 8 bits: the same float pixels */
+            vv_image *plain = NULL;
+            vt_ok(vv_image_new(&plain, 70, 45));
+            ro.pixels8 = NULL;
+            vt_ok(vv_renderer_render(r, w, &w->view, &ro, plain));
+            assert_memory_equal(plain->rgba, img->rgba, sizeof(float) * 4 * 70 * 45);
+            vv_image_free(plain);
+            /* a buffer of another size is refused */
+            vv_pixels8 bad = {.rgbx = rgbx, .width = 69, .height = 45};
+            ro.pixels8 = &bad;
+            assert_int_equal(vv_renderer_render(r, w, &w->view, &ro, img), VV_ERR_INVALID);
+            assert_non_null(strstr(vv_error_message(), "8-bit pixels"));
+            vv_renderer_free(r);
+        }
+    free(rgbx);
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -826,6 +900,7 @@ main(void) {
         cmocka_unit_test(test_option_errors), cmocka_unit_test(test_world_checks),
         cmocka_unit_test(test_frame_runner),  cmocka_unit_test(test_camera_rays),
         cmocka_unit_test(test_region_ops),    cmocka_unit_test(test_stand_in),
+        cmocka_unit_test(test_pixels8),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

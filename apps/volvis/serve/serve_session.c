@@ -92,6 +92,7 @@ struct srv_session {
     tjhandle tj;
     uint8_t *pix; /* 8-bit pixels of the frame being encoded */
     size_t pix_cap;
+    const vv_image *pix_of; /* the image the render left in pix (vv_pixels8), or NULL */
     vv_time_steps *ts;
     int time_steps, time;
     vv_image *full; /* the last full frame, of full_gen */
@@ -499,6 +500,41 @@ ensure_preview(srv_session *s, const vv_world *w) {
     return VV_OK;
 }
 
+/* Room in the render thread's 8-bit buffer for @p w x @p h pixels (grown
+ * as needed: no page faults a frame). 0, or -1 out of memory. */
+static int
+pix_room(srv_session *s, int w, int h) {
+    size_t need = 4 * (size_t)w * (size_t)h;
+    if (need > s->pix_cap) {
+        uint8_t *p = realloc(s->pix, need);
+        if (!p)
+            return -1;
+        s->pix = p;
+        s->pix_cap = need;
+    }
+    return 0;
+}
+
+/* 8-bit RGBX of @p img for JPEG: what its render left in the buffer
+ * (vv_pixels8: converted by the tiles that drew it), or converted now (an
+ * MPI frame; the PNG, which must equal the CLI's, goes through
+ * vv_image_write_png). */
+static uint8_t *
+pixels(srv_session *s, const vv_image *img) {
+    if (img == s->pix_of) {
+        s->pix_of = NULL; /* once: the address may be another image's later */
+        return s->pix;
+    }
+    if (pix_room(s, img->width, img->height) != 0)
+        return NULL;
+        /* rows on every core: the frame was just written by all of them, each
+         * holds part of it in its cache */
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < img->height; y++)
+        vv_image_rect_to_rgbx8(img, 0, y, img->width, y + 1, s->pix);
+    return s->pix;
+}
+
 /*
  * Draws @p w as @p kind into a new image (*out). A World out of core is
  * drawn from what is resident plus at most @p progressive chunks read now
@@ -510,6 +546,7 @@ static vv_status
 draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int cancellable,
      int progressive, int *pending, vv_image **out) {
     *out = NULL;
+    s->pix_of = NULL;
     if (pending)
         *pending = 0;
     vv_status st = ensure_preview(s, w);
@@ -538,6 +575,12 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     cancel_ctx cc = {s, gen, cancellable};
     vv_render_options ro;
     vv_render_options_init(&ro);
+    /* the frame in 8 bits, written by the tiles that drew it (no pass of its own) */
+    vv_pixels8 p8 = {.width = iw, .height = ih};
+    if (pix_room(s, iw, ih) == 0) {
+        p8.rgbx = s->pix;
+        ro.pixels8 = &p8;
+    }
     ro.threads = s->srv->threads;
     ro.quality = vv_render_settings_quality(&w->render);
     ro.progress.fn = cancel_cb;
@@ -557,46 +600,10 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     }
     if (pending)
         *pending = lod.pending;
+    if (ro.pixels8)
+        s->pix_of = img;
     *out = img;
     return VV_OK;
-}
-
-/* 8-bit RGBX of @p img for JPEG (gamma 1, rounded half up; X is the
- * alpha, unused): one contiguous loop the compiler vectorizes, 4 times
- * quicker than vv_image_to_8bit's lrint per component (the PNG, which must
- * equal the CLI's, goes through vv_image_write_png). */
-static void
-rgbx8(const vv_image *img, uint8_t *out) {
-    const size_t row = 4 * (size_t)img->width;
-    const float *in = img->rgba;
-    /* rows on every core: the frame was just written by all of them, each
-     * holds part of it in its cache */
-#pragma omp parallel for schedule(static)
-    for (int y = 0; y < img->height; y++) {
-        const float *a = in + (size_t)y * row;
-        uint8_t *b = out + (size_t)y * row;
-        for (size_t i = 0; i < row; i++) {
-            float v = a[i] * 255.0f + 0.5f;
-            v = v > 0 ? v : 0;
-            v = v < 255 ? v : 255;
-            b[i] = (uint8_t)v;
-        }
-    }
-}
-
-/* The render thread's 8-bit buffer, grown as needed (no page faults a frame). */
-static uint8_t *
-pixels(srv_session *s, const vv_image *img) {
-    size_t need = 4 * (size_t)img->width * img->height;
-    if (need > s->pix_cap) {
-        uint8_t *p = realloc(s->pix, need);
-        if (!p)
-            return NULL;
-        s->pix = p;
-        s->pix_cap = need;
-    }
-    rgbx8(img, s->pix);
-    return s->pix;
 }
 
 /* Encodes @p img as a FRME and makes it the session's newest frame. */

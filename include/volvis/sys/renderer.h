@@ -529,6 +529,13 @@ typedef struct vv_frame_job {
     void *user;           /**< its payload */
     double progress_from; /**< the run reports progress from here ... */
     double progress_to;   /**< ... to here (0 and 0: 0 to 1) */
+    /** NULL, or the image whose pixels a tile leaves final when it returns
+     *  (the frame's last pass over the caller's image, whole renders
+     *  only): with vv_render_options.pixels8 the runner converts each
+     *  finished tile to 8 bits on its thread (vv_image_rect_to_rgbx8) and,
+     *  once every tile of the whole image is done, sets
+     *  pixels8->converted_in_tiles. */
+    const vv_image *image;
 } vv_frame_job;
 
 /** A whole image, 16-pixel tiles, progress 0 to 1. */

@@ -1205,6 +1205,8 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
         if (fr.refine)
             job.scratch_bytes = vv_frame_refine_scratch_bytes();
         vv_frame_job_region(&job, region); /* the rest stays empty */
+        if (!region)
+            job.image = out; /* a tile's pixels are final: 8 bits there (vv_pixels8) */
         s = vv_frame_run(&job, opt);
     }
     for (int i = 0; i < fr.n_obj; i++) {
