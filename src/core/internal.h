@@ -111,6 +111,22 @@ vv_voxel_at(const vv_volume *v, size_t idx) {
     return vv_voxel_value(v->type, v->data, idx);
 }
 
+/**
+ * Widens [@p range[0], @p range[1]] (start: INFINITY, -INFINITY) to the
+ * @p n voxels of type @p type at @p p, as vv_volume_update_range measures
+ * them (NaN ignored): a reader that writes a volume piece by piece measures
+ * each piece while it is in the cache, and the pieces' union is the whole
+ * volume's range, bit for bit. Reentrant.
+ */
+void vv_range_accumulate(vv_voxel_type type, const void *p, size_t n, double range[2]);
+
+/**
+ * Sets @p v's range to @p range measured by vv_range_accumulate over every
+ * voxel (an empty or all-NaN one: 0, 0, as vv_volume_update_range), and
+ * bumps v->modified.
+ */
+void vv_volume_set_range(vv_volume *v, const double range[2]);
+
 /** strdup that returns NULL on failure. */
 char *vv_strdup(const char *s);
 

@@ -299,6 +299,66 @@ vv_volume_update_range(vv_volume *v) {
     v->modified++;
 }
 
+#define VV_RANGE_ACC(T, START_LO, START_HI)                                                        \
+    do {                                                                                           \
+        const T *q = (const T *)p;                                                                 \
+        T l = (START_LO), h = (START_HI);                                                          \
+        for (size_t i = 0; i < n; i++) {                                                           \
+            T x = q[i];                                                                            \
+            l = x < l ? x : l;                                                                     \
+            h = x > h ? x : h;                                                                     \
+        }                                                                                          \
+        lo = (double)l;                                                                            \
+        hi = (double)h;                                                                            \
+    } while (0)
+
+void
+vv_range_accumulate(vv_voxel_type type, const void *p, size_t n, double range[2]) {
+    double lo = INFINITY, hi = -INFINITY;
+    switch (type) {
+    case VV_U8:
+        VV_RANGE_ACC(uint8_t, UINT8_MAX, 0);
+        break;
+    case VV_I8:
+        VV_RANGE_ACC(int8_t, INT8_MAX, INT8_MIN);
+        break;
+    case VV_U16:
+        VV_RANGE_ACC(uint16_t, UINT16_MAX, 0);
+        break;
+    case VV_I16:
+        VV_RANGE_ACC(int16_t, INT16_MAX, INT16_MIN);
+        break;
+    case VV_U32:
+        VV_RANGE_ACC(uint32_t, UINT32_MAX, 0);
+        break;
+    case VV_I32:
+        VV_RANGE_ACC(int32_t, INT32_MAX, INT32_MIN);
+        break;
+    case VV_F32:
+        VV_RANGE_ACC(float, INFINITY, -INFINITY);
+        break;
+    case VV_F64:
+        VV_RANGE_ACC(double, INFINITY, -INFINITY);
+        break;
+    }
+    /* an integer piece's start values are the type's ends, which its voxels
+     * may equal: only a piece of voxels widens the range */
+    if (n) {
+        range[0] = lo < range[0] ? lo : range[0];
+        range[1] = hi > range[1] ? hi : range[1];
+    }
+}
+
+void
+vv_volume_set_range(vv_volume *v, const double range[2]) {
+    double lo = range[0], hi = range[1];
+    if (!(lo <= hi))
+        lo = hi = 0;
+    v->range[0] = lo;
+    v->range[1] = hi;
+    v->modified++;
+}
+
 double
 vv_volume_get(const vv_volume *v, int i, int j, int k) {
     size_t idx = ((size_t)k * (size_t)v->dims[1] + (size_t)j) * (size_t)v->dims[0] + (size_t)i;

@@ -801,6 +801,11 @@ test_v3_good(void **state) {
                 const int c = (k / 4) * 4 + (j / 4) * 2 + i / 4;
                 assert_int_equal(d[(k * 8 + j) * 8 + i], c == 6 ? 7 : c + 1);
             }
+    /* the range measured chunk by chunk as they were copied is the
+     * volume's (a pass over it gives the same) */
+    assert_true(v->range[0] == 1 && v->range[1] == 8);
+    vv_volume_update_range(v);
+    assert_true(v->range[0] == 1 && v->range[1] == 8);
     vv_volume_free(v);
 }
 

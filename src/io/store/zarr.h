@@ -123,12 +123,14 @@ uint64_t vv_zr_chunk_linear(const zr_layout *J, const int c[3]);
  * an array of ddims voxels (i fastest) whose voxel (0, 0, 0) is the
  * volume's voxel dorg (it must hold the chunk's part inside the array).
  * *missing (may be NULL) = 1 when the chunk file is absent (the fill
- * value); *file_bytes (may be NULL) = the bytes read from the file.
+ * value); *file_bytes (may be NULL) = the bytes read from the file;
+ * @p range (may be NULL) widened to the voxels copied, each row measured
+ * as it is written (vv_range_accumulate: no pass over the volume after).
  * Errors: VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_LIMIT, VV_ERR_NOMEM, naming the
  * chunk's file. Reentrant. */
 vv_status vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned char *dst,
                            const int dorg[3], const int ddims[3], int *missing,
-                           uint64_t *file_bytes);
+                           uint64_t *file_bytes, double *range);
 
 /* Reads and decodes the chunk at grid position @p idx (the read unit's
  * grid: inner chunks of a sharded array) into @p out (exactly @p n bytes);

@@ -29,7 +29,7 @@ zp_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsi
               const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
     const zp_level *l = &((const zp_store *)ctx)->lv[level];
     return vv_zr_copy_chunk(&l->J, vv_zr_chunk_linear(&l->J, c), scratch, dst, org, dims, missing,
-                            file_bytes);
+                            file_bytes, NULL);
 }
 
 static void

@@ -807,7 +807,8 @@ vv_zr_chunk_linear(const zr_layout *J, const int c[3]) {
 
 vv_status
 vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned char *dst,
-                 const int dorg[3], const int ddims[3], int *missing_out, uint64_t *file_bytes) {
+                 const int dorg[3], const int ddims[3], int *missing_out, uint64_t *file_bytes,
+                 double *range) {
     const zr_array *a = J->a;
     uint64_t idx[ZR_MAX_DIM];
     for (int i = a->ndim - 1; i >= 0; i--) {
@@ -871,6 +872,8 @@ vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned ch
             else
                 for (uint64_t ii = 0; ii < n[0]; ii++)
                     memcpy(d + ii * vs, src + ii * si * vs, vs);
+            if (range) /* the row just written, in this core's cache */
+                vv_range_accumulate(a->type, d, (size_t)n[0], range);
         }
     return VV_OK;
 }
@@ -921,13 +924,16 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
     const int zero[3] = {0, 0, 0};
+    /* the value range measured as the chunks are copied (no pass after) */
+    double range[2] = {INFINITY, -INFINITY};
 #pragma omp parallel num_threads(nthreads)
     {
         unsigned char *buf = malloc(J.cbytes);
+        double mine[2] = {INFINITY, -INFINITY};
 #pragma omp for schedule(dynamic, 1)
         for (long long L = 0; L < (long long)n_spatial; L++) {
             vv_status cs =
-                buf ? vv_zr_copy_chunk(&J, (uint64_t)L, buf, v->data, zero, dims, NULL, NULL)
+                buf ? vv_zr_copy_chunk(&J, (uint64_t)L, buf, v->data, zero, dims, NULL, NULL, mine)
                     : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
                                    J.cbytes);
             if (cs != VV_OK) {
@@ -940,13 +946,18 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
             }
         }
         free(buf);
+#pragma omp critical(vv_zarr_range)
+        {
+            range[0] = mine[0] < range[0] ? mine[0] : range[0];
+            range[1] = mine[1] > range[1] ? mine[1] : range[1];
+        }
     }
     if (first >= 0) {
         vv_volume_free(v);
         return vv_error_set(first_status, "%s", first_msg);
     }
     vv_zr_geometry(&J, v);
-    vv_volume_update_range(v);
+    vv_volume_set_range(v, range);
     if (info) {
         info->n_channels = (int)nc;
         info->n_levels = n_levels;
