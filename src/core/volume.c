@@ -248,57 +248,6 @@ vv_volume_voxel_count(const vv_volume *v) {
 /* Min and max in the voxel type itself (the compiler vectorizes integer
  * min/max; a conversion to double per voxel did not: 0.7 GB/s a thread).
  * Floats compare in their type; NaN compares false and is skipped. */
-#define VV_RANGE_LOOP(T, START_LO, START_HI)                                                       \
-    do {                                                                                           \
-        const T *p = (const T *)v->data;                                                           \
-        T l = (START_LO), h = (START_HI);                                                          \
-        _Pragma("omp parallel for reduction(min : l) reduction(max : h) schedule(static)") for (   \
-            int64_t i = 0; i < (int64_t)n; i++) {                                                  \
-            T x = p[i];                                                                            \
-            l = x < l ? x : l;                                                                     \
-            h = x > h ? x : h;                                                                     \
-        }                                                                                          \
-        lo = (double)l;                                                                            \
-        hi = (double)h;                                                                            \
-    } while (0)
-
-void
-vv_volume_update_range(vv_volume *v) {
-    uint64_t n = vv_volume_voxel_count(v);
-    double lo = INFINITY, hi = -INFINITY;
-    switch (v->type) {
-    case VV_U8:
-        VV_RANGE_LOOP(uint8_t, UINT8_MAX, 0);
-        break;
-    case VV_I8:
-        VV_RANGE_LOOP(int8_t, INT8_MAX, INT8_MIN);
-        break;
-    case VV_U16:
-        VV_RANGE_LOOP(uint16_t, UINT16_MAX, 0);
-        break;
-    case VV_I16:
-        VV_RANGE_LOOP(int16_t, INT16_MAX, INT16_MIN);
-        break;
-    case VV_U32:
-        VV_RANGE_LOOP(uint32_t, UINT32_MAX, 0);
-        break;
-    case VV_I32:
-        VV_RANGE_LOOP(int32_t, INT32_MAX, INT32_MIN);
-        break;
-    case VV_F32:
-        VV_RANGE_LOOP(float, INFINITY, -INFINITY);
-        break;
-    case VV_F64:
-        VV_RANGE_LOOP(double, INFINITY, -INFINITY);
-        break;
-    }
-    if (!(lo <= hi))
-        lo = hi = 0;
-    v->range[0] = lo;
-    v->range[1] = hi;
-    v->modified++;
-}
-
 #define VV_RANGE_ACC(T, START_LO, START_HI)                                                        \
     do {                                                                                           \
         const T *q = (const T *)p;                                                                 \
@@ -357,6 +306,33 @@ vv_volume_set_range(vv_volume *v, const double range[2]) {
     v->range[0] = lo;
     v->range[1] = hi;
     v->modified++;
+}
+
+/* Pieces of this many voxels at least, one at a time per thread. */
+#define VV_RANGE_PIECE ((size_t)1 << 16)
+
+void
+vv_volume_update_range(vv_volume *v) {
+    const size_t n = (size_t)vv_volume_voxel_count(v);
+    const size_t es = vv_voxel_type_size(v->type);
+    const int64_t pieces = (int64_t)((n + VV_RANGE_PIECE - 1) / VV_RANGE_PIECE);
+    double range[2] = {INFINITY, -INFINITY};
+#pragma omp parallel if (pieces > 1)
+    {
+        double mine[2] = {INFINITY, -INFINITY};
+#pragma omp for schedule(static)
+        for (int64_t p = 0; p < pieces; p++) {
+            const size_t first = (size_t)p * VV_RANGE_PIECE;
+            const size_t len = n - first < VV_RANGE_PIECE ? n - first : VV_RANGE_PIECE;
+            vv_range_accumulate(v->type, (const unsigned char *)v->data + first * es, len, mine);
+        }
+#pragma omp critical(vv_volume_range)
+        {
+            range[0] = mine[0] < range[0] ? mine[0] : range[0];
+            range[1] = mine[1] > range[1] ? mine[1] : range[1];
+        }
+    }
+    vv_volume_set_range(v, range);
 }
 
 double

@@ -295,16 +295,22 @@ test_update_range(void **state) {
         {VV_I16, -32768, -5},     {VV_U32, 7, 4294967295.0}, {VV_I32, -2147483648.0, 2147483647.0},
         {VV_F32, -1.5e-3, 2.5e7}, {VV_F64, -1e300, 1e-300},
     };
-    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        vv_volume *v = make_volume(9, 8, 7, cases[c].t);
+    /* small, and large enough to be measured in pieces on several threads
+     * (the extremes in different pieces, the last piece partial) */
+    const size_t n_cases = sizeof cases / sizeof cases[0];
+    for (size_t run = 0; run < 2 * n_cases; run++) {
+        const int big = run >= n_cases;
+        const int nx = big ? 301 : 9, ny = big ? 300 : 8, nz = 7;
+        const size_t c = run % n_cases;
+        vv_volume *v = make_volume(nx, ny, nz, cases[c].t);
         /* fill with a middle value, then place the extremes far apart */
         double mid = cases[c].lo + (cases[c].hi - cases[c].lo) / 3;
-        for (int k = 0; k < 7; k++)
-            for (int j = 0; j < 8; j++)
-                for (int i = 0; i < 9; i++)
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                for (int i = 0; i < nx; i++)
                     vv_volume_set(v, i, j, k, mid);
-        vv_volume_set(v, 8, 0, 6, cases[c].lo);
-        vv_volume_set(v, 0, 7, 0, cases[c].hi);
+        vv_volume_set(v, nx - 1, 0, nz - 1, cases[c].lo);
+        vv_volume_set(v, 0, ny - 1, 0, cases[c].hi);
         uint64_t mod = v->modified;
         vv_volume_update_range(v);
         assert_true(v->modified > mod);
