@@ -392,6 +392,17 @@ test_scene(void **state) {
                                 !strstr(w, "sub/scene.json") || !strstr(w, cases[i].file)))
             fail_msg("'%s': rc %d, reason '%s'", cases[i].file, rc, w);
     }
+    /* a texture's image: the same rule */
+    {
+        char p[PATH_MAX + 32];
+        snprintf(p, sizeof p, "%s/sub/scene.json", root);
+        static const char text[] = "{\"objects\": [{\"type\": \"sphere\", \"texture\": "
+                                   "{\"image\": \"../../x.png\"}}]}";
+        vt_write_file(p, text, sizeof text - 1);
+        char w[512] = "";
+        assert_int_not_equal(srv_scene_confined(root, p, NULL, 0, NULL, 0, w, sizeof w), 0);
+        assert_non_null(strstr(w, "\"image\" '../../x.png' leaves the root"));
+    }
     /* an absolute path inside the root is inside */
     char p[PATH_MAX + 32], text[PATH_MAX + 128];
     snprintf(p, sizeof p, "%s/sub/scene.json", root);

@@ -113,8 +113,9 @@ extern int srv_openat2_off;
 
 /**
  * Checks scene file @p scene (a real path inside @p root, as
- * srv_path_resolve gives it) for `file` entries that leave the root: at any
- * depth of its JSON, every member "file" with a string value, resolved as
+ * srv_path_resolve gives it) for entries that leave the root: at any depth of
+ * its JSON, every member "file", "image" (a texture) or "volume" (a solid
+ * texture) with a string value, resolved as
  * the scene loader does (relative to the scene's folder; an absolute path
  * as it is), must name a path inside @p root, and opening it beneath the
  * root (srv_open_beneath) must not be refused for a link out; an entry

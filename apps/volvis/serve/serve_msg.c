@@ -535,7 +535,7 @@ join_inside(const char *dir, const char *entry, char *out, size_t cap) {
 }
 
 static int
-check_entry(scene_walk *w, const char *entry) {
+check_entry(scene_walk *w, const char *key, const char *entry) {
     char rel[PATH_MAX];
     if (srv_is_url(entry)) {
         /* a URL (once the door reads them): only one the server was told */
@@ -543,24 +543,24 @@ check_entry(scene_walk *w, const char *entry) {
         if (srv_url_normalize(entry, norm, sizeof norm, why2, sizeof why2) != 0 ||
             !srv_url_allowed(norm, w->urls, w->n_urls, w->prefixes, w->n_prefixes))
             return fail(w->why, w->cap,
-                        "scene '%s': \"file\" '%.200s' is not a URL the server was given",
-                        w->scene_rel, entry);
+                        "scene '%s': \"%s\" '%.200s' is not a URL the server was given",
+                        w->scene_rel, key, entry);
         return 0;
     }
     if (entry[0] == '/') {
         size_t n = strlen(w->root);
         if (!inside(w->root, entry) ||
             join_inside("", entry + (n == 1 ? 0 : n), rel, sizeof rel) != 0)
-            return fail(w->why, w->cap, "scene '%s': \"file\" '%s' lies outside the root folder",
-                        w->scene_rel, entry);
+            return fail(w->why, w->cap, "scene '%s': \"%s\" '%s' lies outside the root folder",
+                        w->scene_rel, key, entry);
     } else if (join_inside(w->dir, entry, rel, sizeof rel) != 0) {
-        return fail(w->why, w->cap, "scene '%s': \"file\" '%s' leaves the root folder",
-                    w->scene_rel, entry);
+        return fail(w->why, w->cap, "scene '%s': \"%s\" '%s' leaves the root folder", w->scene_rel,
+                    key, entry);
     }
     int fd = srv_open_beneath(w->rootfd, rel, O_PATH);
     if (fd < 0 && (errno == EXDEV || errno == ELOOP))
-        return fail(w->why, w->cap, "scene '%s': \"file\" '%s' leaves the root folder (a link out)",
-                    w->scene_rel, entry);
+        return fail(w->why, w->cap, "scene '%s': \"%s\" '%s' leaves the root folder (a link out)",
+                    w->scene_rel, key, entry);
     if (fd >= 0)
         close(fd);
     return 0; /* inside, or missing: the door says what is missing */
@@ -581,8 +581,11 @@ walk_json(scene_walk *w, json_t *v, int depth) {
         const char *k;
         json_t *x;
         json_object_foreach(v, k, x) {
-            if (strcmp(k, "file") == 0 && json_is_string(x)) {
-                if (check_entry(w, json_string_value(x)))
+            /* the members the scene loader reads as paths (vv_path_join_dir): an
+             * object's "file", a texture's "image" and a solid texture's "volume" */
+            if ((strcmp(k, "file") == 0 || strcmp(k, "image") == 0 || strcmp(k, "volume") == 0) &&
+                json_is_string(x)) {
+                if (check_entry(w, k, json_string_value(x)))
                     return -1;
             } else if (walk_json(w, x, depth + 1)) {
                 return -1;
