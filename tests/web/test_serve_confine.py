@@ -13,7 +13,8 @@ Checks, each on the real binary:
     The top listing shows the given URL and the prefix. An allowed URL that
     the door cannot open (nothing listens on its port) answers one line.
   - Paths: "..", a link out (a file and a folder), a listing through a link
-    out are refused; links out are not listed.
+    out are refused; links out are not listed; a MetaImage header with its
+    detached data beside it opens.
   - Scenes: a scene inside the root naming ../../outside, an absolute path
     outside, a link out or a URL not allowed is refused with one line naming
     the scene and the entry; a scene naming ../inside.nrrd opens.
@@ -157,6 +158,12 @@ def main():
     nrrd(secret, secret_dims, 200, SECRET)
     nrrd(os.path.join(outside, "dir", "x.nrrd"), secret_dims, 200, SECRET)
     nrrd(os.path.join(root, "racedir", "x.nrrd"), inside_dims, 10)
+    # a file of two (MetaImage: the header, its detached data beside it)
+    with open(os.path.join(root, "pair.mhd"), "w") as f:
+        f.write("ObjectType = Image\nNDims = 3\nDimSize = 4 3 2\nElementType = MET_UCHAR\n"
+                "ElementDataFile = pair.raw\n")
+    with open(os.path.join(root, "pair.raw"), "wb") as f:
+        f.write(bytes(range(24)))
     os.symlink(secret, os.path.join(root, "link.nrrd"))
     os.symlink(os.path.join(outside, "dir"), os.path.join(root, "linkdir"))
     scenes = {
@@ -271,6 +278,11 @@ def main():
             await refused(ws, {"type": "list", "path": "linkdir"}, "leaves the root")
             await refused(ws, {"type": "save", "path": "linkdir/s.json"}, "leaves the root")
             await refused(ws, {"type": "open", "path": secret}, "absolute")
+            # a header and its detached data, both inside: opens
+            await ws.send(json.dumps({"type": "open", "path": "pair.mhd"}))
+            r = await text_reply(ws, lambda j: j["type"] == "error" or
+                                 j.get("name") == "pair.mhd", "the MetaImage's state")
+            assert r["type"] == "state" and r["dims"] == [4, 3, 2], r
 
     async def scene_files():
         async with srv.connect() as ws:
