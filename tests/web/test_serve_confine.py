@@ -23,7 +23,7 @@ Checks, each on the real binary:
     to an outside folder), with renameat2(RENAME_EXCHANGE), while the client
     opens it again and again: every open shows the inside file or fails;
     the outside file's size and the marker in its header never reach the
-    client.
+    client; a session saved into the swapped folder never lands outside.
 
 usage: test_serve_confine.py VOLVIS_BINARY
 Exits 77 (skipped) when python3-websockets is missing.
@@ -313,7 +313,7 @@ def main():
 
         t = threading.Thread(target=swapper, daemon=True)
         t.start()
-        opened = refusals = by_reader = 0
+        opened = refusals = by_reader = saved = 0
         try:
             async with srv.connect() as ws:
                 await hello(ws)
@@ -331,6 +331,11 @@ def main():
                     if r["type"] == "state":
                         assert r["dims"] == inside_dims, f"the outside file was served: {r}"
                         opened += 1
+                        # a session saved into the folder being swapped: never outside
+                        await ws.send(json.dumps({"type": "save", "path": "racedir/saved.json"}))
+                        r = await text_reply(ws, lambda j: j["type"] in ("saved", "error"),
+                                             "an answer to the save")
+                        saved += r["type"] == "saved"
                         # the next open must not be answered by this file's state again
                         await ws.send(json.dumps({"type": "open", "path": "inside.nrrd"}))
                         await text_reply(ws, lambda j: j["type"] == "error" or
@@ -343,6 +348,9 @@ def main():
         finally:
             stop.set()
             t.join()
+        assert not os.path.exists(os.path.join(outside, "dir", "saved.json")), \
+            "a session was saved outside the root"
+        print(f"     race: {saved} sessions saved, none outside the root")
         print(f"     race: {k} opens, {opened} showed the inside file, {refusals} refused "
               f"({by_reader} of them by a reader, after the server's check passed); "
               f"{swaps[0]} swaps")

@@ -1253,8 +1253,29 @@ save_session(srv_session *s, srv_client *c, const srv_msg *m) {
         if (o->type == VV_OBJECT_VOLUME && !o->geometry.source)
             files[i] = s->file;
     }
+    /* written through its folder opened beneath the root (/proc/self/fd/N/NAME: the
+     * temporary file and the rename go where the check looked, whatever link is swapped
+     * in since) */
+    char rel[SRV_PATH_MAX];
+    snprintf(rel, sizeof rel, "%s", m->path);
+    char *slash = strrchr(rel, '/');
+    const char *base = slash ? slash + 1 : rel;
+    if (slash)
+        *slash = '\0';
+    int rootfd = open(s->srv->root, O_PATH | O_DIRECTORY | O_CLOEXEC);
+    int dfd = rootfd < 0 ? -1 : srv_open_beneath(rootfd, slash ? rel : "", O_PATH | O_DIRECTORY);
+    if (rootfd >= 0)
+        close(rootfd);
+    char pinned[64 + SRV_PATH_MAX];
+    if (dfd < 0) {
+        free(files);
+        reply_error(s, c->id, "save: '%s' leaves the root folder", m->path);
+        return;
+    }
+    snprintf(pinned, sizeof pinned, "/proc/self/fd/%d/%s", dfd, base);
     vv_error_clear();
-    vv_status st = vv_scene_save(s->world, full, files);
+    vv_status st = vv_scene_save(s->world, pinned, files);
+    close(dfd);
     free(files);
     if (st != VV_OK) {
         reply_error(s, c->id, "save: %s: %s", m->path, vv_error_message());
