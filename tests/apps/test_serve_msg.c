@@ -13,6 +13,7 @@
 #define _GNU_SOURCE
 #include "testutil.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -250,11 +251,20 @@ test_paths_walk(void **state) {
     assert_int_not_equal(srv_path_resolve(root, "out", 1, full, sizeof full, w, sizeof w), 0);
     assert_int_not_equal(srv_path_resolve(root, "out/x.json", 2, full, sizeof full, w, sizeof w),
                          0);
+    assert_non_null(strstr(w, "leaves the root"));
     int rfd = open(root, O_PATH | O_DIRECTORY);
     assert_true(rfd >= 0);
     errno = 0;
     assert_int_equal(srv_open_beneath(rfd, "sub/../sub/a.nrrd", O_PATH), -1);
     assert_int_equal(errno, EXDEV);
+    /* the root itself and a folder, opened to be listed */
+    for (int k = 0; k < 2; k++) {
+        int dfd = srv_open_beneath(rfd, k ? "sub" : "", O_RDONLY | O_DIRECTORY);
+        assert_true(dfd >= 0);
+        DIR *d = fdopendir(dfd);
+        assert_non_null(d);
+        closedir(d);
+    }
     srv_openat2_off = 0;
     /* openat2 itself: ".." that climbs out, an absolute link */
     errno = 0;

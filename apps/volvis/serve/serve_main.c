@@ -538,6 +538,9 @@ cli_serve_main(int argc, char **argv) {
     if (n_files > 1)
         return cli_usage_error(&a, "expected at most one FILE, SCENE or FOLDER, got %d", n_files);
     memset(&server, 0, sizeof server);
+    /* for tests and old kernels' behaviour: the walk that replaces openat2 */
+    if (getenv("VOLVIS_SERVE_NO_OPENAT2") && strcmp(getenv("VOLVIS_SERVE_NO_OPENAT2"), "0"))
+        srv_openat2_off = 1;
     /* the URLs and prefixes, in normal form (what a client's URL is compared with) */
     server.urls = calloc((size_t)a.n_pos + 1, sizeof *server.urls);
     server.prefixes = calloc((size_t)cli_count(&a, "allow-url") + 1, sizeof *server.prefixes);

@@ -346,8 +346,12 @@ srv_open_beneath(int dirfd, const char *rel, int flags) {
             return (int)fd;
     }
     /* no openat2: one component at a time, following no link */
+    if (!*rel)
+        return openat(dirfd, ".", flags | O_CLOEXEC);
     int cur = openat(dirfd, ".", O_PATH | O_DIRECTORY | O_CLOEXEC);
-    for (const char *c = rel; cur >= 0 && *c;) {
+    if (cur < 0)
+        return -1;
+    for (const char *c = rel; *c;) {
         size_t n = strcspn(c, "/");
         const char *next = c + n;
         while (*next == '/')
@@ -365,9 +369,13 @@ srv_open_beneath(int dirfd, const char *rel, int flags) {
                         last ? flags | O_NOFOLLOW | O_CLOEXEC
                              : O_PATH | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
         int e = errno;
+        struct stat ls;
+        if (fd < 0 && (e == ENOTDIR || e == ELOOP) &&
+            fstatat(cur, name, &ls, AT_SYMLINK_NOFOLLOW) == 0 && S_ISLNK(ls.st_mode))
+            e = ELOOP; /* a link (O_NOFOLLOW with O_DIRECTORY says ENOTDIR): refused as one */
         close(cur);
         if (fd < 0) {
-            errno = e == ENOTDIR && !last ? ELOOP : e;
+            errno = e;
             return -1;
         }
         struct stat st;
@@ -381,7 +389,9 @@ srv_open_beneath(int dirfd, const char *rel, int flags) {
         cur = fd;
         c = next;
     }
-    return cur; /* "": the folder itself */
+    close(cur); /* not reached: the last component returned */
+    errno = EINVAL;
+    return -1;
 }
 
 /* The path of open @p fd (its /proc/self/fd link: no link left in it) into @p out, which
