@@ -5,7 +5,8 @@
  * request needs the access token printed at the start (compared in
  * constant time, then kept in an HttpOnly SameSite=Strict cookie); the
  * WebSocket upgrade also needs the page's own Origin. Paths a client names
- * stay inside --root. A malformed message closes that client only.
+ * are opened beneath --root; URLs only as given on the command line or under
+ * --allow-url. A malformed message closes that client only.
  */
 #define _GNU_SOURCE
 #include <errno.h>
