@@ -72,14 +72,62 @@ sbx_profile_before_lockdown(void) {
         __llvm_profile_set_dumped();
 }
 
+/* A first Landlock layer from $VOLVIS_SANDBOX_BENEATH (a folder: `volvis
+ * serve` sets its --root): reads beneath it (and the memory cgroup's
+ * files) only, whatever path the request names. Layers intersect, so the
+ * input folder's layer below can only narrow it: a link swapped into the
+ * root after the server's check cannot make a reader read outside the
+ * root. Returns 0 (also when unset), or -1 with errno. */
+static int
+beneath_layer(uint64_t handled) {
+    const char *root = getenv("VOLVIS_SANDBOX_BENEATH");
+    if (!root || !root[0])
+        return 0;
+    struct sbx_landlock_ruleset_attr ra = {0};
+    ra.handled_access_fs = handled;
+    int rs = (int)syscall(SYS_landlock_create_ruleset, &ra, sizeof(uint64_t), 0);
+    if (rs < 0)
+        return -1;
+    char dirs[2][SBX_MAX_PATH];
+    int nd = 0;
+    snprintf(dirs[nd++], sizeof dirs[0], "%s", root);
+    if (vv_memory_cgroup_root(dirs[nd], sizeof dirs[nd]))
+        nd++;
+    int ok = 1;
+    for (int i = 0; i < nd && ok; i++) {
+        struct landlock_path_beneath_attr pb = {0};
+        pb.allowed_access = LANDLOCK_ACCESS_FS_READ_FILE | LANDLOCK_ACCESS_FS_READ_DIR;
+        pb.parent_fd = open(dirs[i], O_PATH | O_DIRECTORY | O_CLOEXEC);
+        if (pb.parent_fd < 0) {
+            ok = i > 0; /* the root must exist; the cgroup may not */
+            break;
+        }
+        if (syscall(SYS_landlock_add_rule, rs, LANDLOCK_RULE_PATH_BENEATH, &pb, 0) != 0)
+            ok = 0;
+        close(pb.parent_fd);
+    }
+    if (ok && syscall(SYS_landlock_restrict_self, rs, 0) != 0)
+        ok = 0;
+    int e = errno;
+    close(rs);
+    errno = e;
+    return ok ? 0 : -1;
+}
+
 /* Read access beneath the folder of @p path (the folder itself when it is
  * one) and nothing else on any file system; no TCP; no signals to or
- * abstract sockets of processes outside. Returns 0, or -1 with errno (the
- * kernel has no Landlock: ENOSYS or EOPNOTSUPP). */
+ * abstract sockets of processes outside. With $VOLVIS_SANDBOX_BENEATH, a
+ * layer beneath that folder first (beneath_layer). Returns 0, or -1 with
+ * errno (the kernel has no Landlock: ENOSYS or EOPNOTSUPP). */
 int
 sbx_landlock_restrict(const char *path) {
     long abi = syscall(SYS_landlock_create_ruleset, NULL, 0, LANDLOCK_CREATE_RULESET_VERSION);
     if (abi < 1)
+        return -1;
+    if (beneath_layer(abi >= 5   ? 0xffffULL
+                      : abi >= 3 ? 0x7fffULL
+                      : abi >= 2 ? 0x3fffULL
+                                 : 0x1fffULL) != 0)
         return -1;
     struct sbx_landlock_ruleset_attr ra = {0};
     ra.handled_access_fs = abi >= 5   ? 0xffffULL

@@ -5,12 +5,17 @@
  * type, out of range, too long, control bytes, duplicate keys) is refused
  * with a reason naming the field; paths stay inside the root (absolute
  * paths, "..", links out of the root, a save over a folder or a link, a
- * save that is not .json are refused).
+ * save that is not .json are refused), through openat2 and through the
+ * walk that replaces it on kernels without; URLs in normal form and the
+ * allow list (no userinfo, no encoded or plain "..", prefixes on a
+ * segment boundary); a scene's "file" entries stay inside the root.
  */
 #define _GNU_SOURCE
 #include "testutil.h"
 
+#include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -226,12 +231,206 @@ test_paths(void **state) {
     assert_int_equal(srv_path_resolve(root, "b.json", 2, full, sizeof full, w, sizeof w), 0);
 }
 
+/* The checks of test_paths through the walk a kernel without openat2 takes: links are
+ * refused there, even one that stays inside. */
+static void
+test_paths_walk(void **state) {
+    (void)state;
+    if (!root[0])
+        fail_msg("test_paths made no root folder");
+    srv_openat2_off = 1;
+    char full[PATH_MAX], w[256];
+    assert_int_equal(srv_path_resolve(root, "sub/a.nrrd", 0, full, sizeof full, w, sizeof w), 0);
+    assert_int_equal(srv_path_resolve(root, "sub/", 1, full, sizeof full, w, sizeof w), 0);
+    assert_int_equal(srv_path_resolve(root, "sub/new.json", 2, full, sizeof full, w, sizeof w), 0);
+    assert_int_not_equal(srv_path_resolve(root, "sub/in", 0, full, sizeof full, w, sizeof w), 0);
+    assert_non_null(strstr(w, "leaves the root"));
+    assert_int_not_equal(srv_path_resolve(root, "out/passwd", 0, full, sizeof full, w, sizeof w),
+                         0);
+    assert_non_null(strstr(w, "leaves the root"));
+    assert_int_not_equal(srv_path_resolve(root, "out", 1, full, sizeof full, w, sizeof w), 0);
+    assert_int_not_equal(srv_path_resolve(root, "out/x.json", 2, full, sizeof full, w, sizeof w),
+                         0);
+    assert_non_null(strstr(w, "leaves the root"));
+    int rfd = open(root, O_PATH | O_DIRECTORY);
+    assert_true(rfd >= 0);
+    errno = 0;
+    assert_int_equal(srv_open_beneath(rfd, "sub/../sub/a.nrrd", O_PATH), -1);
+    assert_int_equal(errno, EXDEV);
+    /* the root itself and a folder, opened to be listed */
+    for (int k = 0; k < 2; k++) {
+        int dfd = srv_open_beneath(rfd, k ? "sub" : "", O_RDONLY | O_DIRECTORY);
+        assert_true(dfd >= 0);
+        DIR *d = fdopendir(dfd);
+        assert_non_null(d);
+        closedir(d);
+    }
+    srv_openat2_off = 0;
+    /* openat2 itself: ".." that climbs out, an absolute link */
+    errno = 0;
+    assert_int_equal(srv_open_beneath(rfd, "sub/../../x", O_PATH), -1);
+    assert_int_equal(errno, EXDEV);
+    assert_int_equal(srv_open_beneath(rfd, "out", O_PATH), -1);
+    int fd = srv_open_beneath(rfd, "sub/../sub/a.nrrd", O_RDONLY);
+    assert_true(fd >= 0);
+    close(fd);
+    close(rfd);
+}
+
+static void
+test_urls(void **state) {
+    (void)state;
+    static const struct {
+        const char *in, *out;
+    } good[] = {
+        {"HTTP://Example.ORG", "http://example.org/"},
+        {"http://example.org:80/a/b.zarr", "http://example.org/a/b.zarr"},
+        {"https://example.org:443/a", "https://example.org/a"},
+        {"https://example.org:8443/a/", "https://example.org:8443/a/"},
+        {"http://127.0.0.1:9000/d%61ta/%7e/x%2a", "http://127.0.0.1:9000/data/~/x%2A"},
+        {"http://[::1]:8080/x", "http://[::1]:8080/x"},
+        {"s3://my-bucket/key/img.ome.zarr", "s3://my-bucket/key/img.ome.zarr"},
+        {"https://h/x?X-Amz-Signature=1#frag", "https://h/x?X-Amz-Signature=1"},
+    };
+    char out[SRV_URL_MAX], w[512];
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        if (srv_url_normalize(good[i].in, out, sizeof out, w, sizeof w))
+            fail_msg("'%s' refused: %s", good[i].in, w);
+        if (strcmp(out, good[i].out))
+            fail_msg("'%s' -> '%s', not '%s'", good[i].in, out, good[i].out);
+    }
+    static const struct {
+        const char *in, *needle;
+    } bad[] = {
+        {"file:///etc/passwd", "only http"},
+        {"gopher://h/x", "only http"},
+        {"/etc/passwd", "not a URL"},
+        {"http://user:pw@h/x", "user information"},
+        {"http://h@evil/x", "user information"},
+        {"http://h/a/../b", "'..'"},
+        {"http://h/a/%2e%2E/b", "'..'"},
+        {"http://h/a/./b", "'.'"},
+        {"http://h/a//b", "empty"},
+        {"http://h/a%2fb", "encoded"},
+        {"http://h/a%5cb", "encoded"},
+        {"http://h/a%00b", "encoded"},
+        {"http://h/a%zz", "percent-escape"},
+        {"http://h/a%2", "percent-escape"},
+        {"http://h/a\\b", "backslash"},
+        {"http://h/a b", "space"},
+        {"http://h:99999/", "port"},
+        {"http://h:0/", "port 0"},
+        {"http://h:/", "port"},
+        {"s3://b:9000/k", "not a port"},
+        {"http://h%2f/x", "host"},
+        {"http:///x", "no host"},
+        {"http://[zz]/x", "IPv6"},
+        {"http://h\x7f/", "control"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        w[0] = '\0';
+        if (srv_url_normalize(bad[i].in, out, sizeof out, w, sizeof w) == 0)
+            fail_msg("accepted '%s' as '%s'", bad[i].in, out);
+        if (!strstr(w, bad[i].needle))
+            fail_msg("'%s': reason '%s' lacks '%s'", bad[i].in, w, bad[i].needle);
+        for (const char *p = w; *p; p++)
+            assert_true((unsigned char)*p >= 0x20);
+    }
+    char *urls[] = {"http://h/given/a.zarr", "https://h/q?sig=1"};
+    char *prefixes[] = {"http://h:8000/data", "s3://bucket/images/"};
+    static const struct {
+        const char *url;
+        int ok;
+    } allow[] = {
+        {"http://h/given/a.zarr", 1},     {"http://h/given/a.zarr/", 0},
+        {"http://h/given/b.zarr", 0},     {"https://h/given/a.zarr", 0},
+        {"https://h/q?sig=1", 1},         {"https://h/q?sig=2", 0},
+        {"http://h:8000/data", 1},        {"http://h:8000/data/x.zarr", 1},
+        {"http://h:8000/database", 0},    {"http://h:8000/dat", 0},
+        {"http://h:8001/data/x", 0},      {"http://h/data/x", 0},
+        {"https://h:8000/data/x", 0},     {"http://h:8000/data/x?a=1", 0},
+        {"s3://bucket/images/x.zarr", 1}, {"s3://bucket/images", 0},
+        {"s3://bucket2/images/x", 0},
+    };
+    for (size_t i = 0; i < sizeof allow / sizeof allow[0]; i++)
+        if (srv_url_allowed(allow[i].url, urls, 2, prefixes, 2) != allow[i].ok)
+            fail_msg("'%s': allowed %d, expected %d", allow[i].url, !allow[i].ok, allow[i].ok);
+    /* a client's URL is compared in normal form: these all name the prefix's folder */
+    static const char *const sneaky[] = {"HTTP://H:8000/data/x", "http://h:8000/%64ata/x"};
+    for (size_t i = 0; i < 2; i++) {
+        assert_int_equal(srv_url_normalize(sneaky[i], out, sizeof out, w, sizeof w), 0);
+        assert_int_equal(srv_url_allowed(out, urls, 2, prefixes, 2), 1);
+    }
+    assert_int_equal(srv_is_url("s3://b/k"), 1);
+    assert_int_equal(srv_is_url("a.nrrd"), 0);
+    assert_int_equal(srv_is_url("dir://x"), 1);
+    assert_int_equal(srv_is_url("1x://x"), 0);
+}
+
+/* A scene's "file" entries, written into the root of test_paths. */
+static void
+test_scene(void **state) {
+    (void)state;
+    if (!root[0])
+        fail_msg("test_paths made no root folder");
+    static const struct {
+        const char *file, *needle; /* NULL: accepted */
+    } cases[] = {
+        {"a.nrrd", NULL},
+        {"../sub/a.nrrd", NULL},
+        {"in", NULL},
+        {"missing.nrrd", NULL},
+        {"../../etc/passwd", "leaves the root"},
+        {"../out/passwd", "leaves the root"},
+        {"/etc/passwd", "outside the root"},
+        {"http://h/x.zarr", "not a URL the server was given"},
+        {"http://h:8000/data/x.zarr", NULL},
+    };
+    char *prefixes[] = {"http://h:8000/data"};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char p[PATH_MAX + 32], text[512];
+        snprintf(p, sizeof p, "%s/sub/scene.json", root);
+        int n =
+            snprintf(text, sizeof text, "{\"objects\": [{\"type\": \"volume\", \"file\": \"%s\"}]}",
+                     cases[i].file);
+        vt_write_file(p, text, (size_t)n);
+        char w[512] = "";
+        int rc = srv_scene_confined(root, p, NULL, 0, prefixes, 1, w, sizeof w);
+        if (!cases[i].needle && rc != 0)
+            fail_msg("'%s' refused: %s", cases[i].file, w);
+        if (cases[i].needle && (rc == 0 || !strstr(w, cases[i].needle) ||
+                                !strstr(w, "sub/scene.json") || !strstr(w, cases[i].file)))
+            fail_msg("'%s': rc %d, reason '%s'", cases[i].file, rc, w);
+    }
+    /* a texture's image: the same rule */
+    {
+        char p[PATH_MAX + 32];
+        snprintf(p, sizeof p, "%s/sub/scene.json", root);
+        static const char text[] = "{\"objects\": [{\"type\": \"sphere\", \"texture\": "
+                                   "{\"image\": \"../../x.png\"}}]}";
+        vt_write_file(p, text, sizeof text - 1);
+        char w[512] = "";
+        assert_int_not_equal(srv_scene_confined(root, p, NULL, 0, NULL, 0, w, sizeof w), 0);
+        assert_non_null(strstr(w, "\"image\" '../../x.png' leaves the root"));
+    }
+    /* an absolute path inside the root is inside */
+    char p[PATH_MAX + 32], text[PATH_MAX + 128];
+    snprintf(p, sizeof p, "%s/sub/scene.json", root);
+    int n = snprintf(text, sizeof text, "{\"objects\": [{\"file\": \"%s/sub/a.nrrd\"}]}", root);
+    vt_write_file(p, text, (size_t)n);
+    char w[512];
+    assert_int_equal(srv_scene_confined(root, p, NULL, 0, NULL, 0, w, sizeof w), 0);
+    /* a volume file is not read as a scene */
+    snprintf(p, sizeof p, "%s/sub/a.nrrd", root);
+    assert_int_equal(srv_scene_confined(root, p, NULL, 0, NULL, 0, w, sizeof w), 0);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_good),
-        cmocka_unit_test(test_bad),
-        cmocka_unit_test(test_paths),
+        cmocka_unit_test(test_good),  cmocka_unit_test(test_bad),
+        cmocka_unit_test(test_paths), cmocka_unit_test(test_paths_walk),
+        cmocka_unit_test(test_urls),  cmocka_unit_test(test_scene),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

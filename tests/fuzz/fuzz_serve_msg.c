@@ -4,7 +4,9 @@
  * one WebSocket text message: srv_msg_parse must accept it with every
  * field in range or refuse it with one printable line; a path it names is
  * then resolved inside a root folder of the harness (with a link out of
- * it), and must stay inside or be refused with one printable line.
+ * it), and must stay inside or be refused with one printable line; a URL
+ * it names is put in normal form (idempotent, no user information, no
+ * "." or ".." segment) and checked against a prefix.
  */
 #include <limits.h>
 #include <stdint.h>
@@ -77,6 +79,35 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             if (strncmp(full, root, n) != 0 || (full[n] != '\0' && full[n] != '/'))
                 __builtin_trap(); /* out of the root */
         }
+    }
+    if (m.type == SRV_OPEN && m.url[0]) {
+        /* a URL: refused in one line, or a normal form that is its own normal form, has
+         * no user information, no "." or ".." segment, and is allowed only under the
+         * prefix on a segment boundary */
+        char norm[SRV_URL_MAX], again[SRV_URL_MAX];
+        why[0] = '\0';
+        if (srv_url_normalize(m.url, norm, sizeof norm, why, sizeof why) != 0) {
+            one_line(why);
+            return 0;
+        }
+        if (srv_url_normalize(norm, again, sizeof again, why, sizeof why) != 0 ||
+            strcmp(norm, again) != 0)
+            __builtin_trap();
+        const char *auth = strstr(norm, "://") + 3;
+        size_t al = strcspn(auth, "/");
+        char path[SRV_URL_MAX]; /* the path, with a "/" after it (the query may hold anything) */
+        snprintf(path, sizeof path, "%.*s/", (int)strcspn(auth + al, "?"), auth + al);
+        size_t pl = strlen(path);
+        if (memchr(auth, '@', al) || path[0] != '/' || strstr(path, "/../") || strstr(path, "/./"))
+            __builtin_trap();
+        /* no empty segment but the last (a trailing "/"): "//" only as the path's end */
+        const char *dbl = strstr(path, "//");
+        if (dbl && dbl != path + pl - 2)
+            __builtin_trap();
+        char *prefixes[] = {"http://h/data/"};
+        if (srv_url_allowed(norm, NULL, 0, prefixes, 1) &&
+            (strncmp(norm, "http://h/data/", 14) != 0 || strchr(norm, '?')))
+            __builtin_trap();
     }
     return 0;
 }

@@ -90,12 +90,20 @@ def log(*a):
 
 # ---- the server ----------------------------------------------------------------------------
 
+REMOTE_PREFIX = 'http://127.0.0.1:9/data/'
+REMOTE_URL = 'http://127.0.0.1:9/given.ome.zarr'
+
+
 class Server:
-    """`volvis serve --port 0 --root ROOT FILE`; its URL is read from its stdout."""
+    """`volvis serve --port 0 --root ROOT --allow-url REMOTE_PREFIX REMOTE_URL FILE`; its
+    URL is read from its stdout."""
 
     def __init__(self, root, file):
         self.stderr = open(os.path.join(OUT, 'serve.log'), 'w')
-        self.proc = subprocess.Popen([VOLVIS, 'serve', '--port', '0', '--root', root, file],
+        # remote data the page lists (nothing listens on port 9: opening one is the
+        # door's one-line error, today and once the build reads URLs)
+        self.proc = subprocess.Popen([VOLVIS, 'serve', '--port', '0', '--root', root,
+                                      '--allow-url', REMOTE_PREFIX, REMOTE_URL, file],
                                      stdout=subprocess.PIPE, stderr=self.stderr)
         deadline = time.time() + START_S
         out = b''
@@ -758,6 +766,40 @@ class T07Tabs(unittest.TestCase):
             DRIVER.switch_to.window(second)
             DRIVER.close()
             DRIVER.switch_to.window(first)
+
+
+class T07Remote(unittest.TestCase):
+    """Remote data: the URL and the prefix the server was given, by name; a prefix
+    fills the URL field; a URL the server was not given is refused in one line."""
+
+    def test_remote(self):
+        def items():
+            return [b.get_attribute('data-name') for b in
+                    DRIVER.find_elements(By.CSS_SELECTOR, '#remote button')]
+        wait_for('the remote data listed', lambda: REMOTE_URL in items())
+        self.assertTrue(DRIVER.find_element(By.ID, 'remote-group').is_displayed())
+        self.assertEqual(items(), [REMOTE_URL, REMOTE_PREFIX + '…'])
+        click(DRIVER.find_element(By.CSS_SELECTOR, f'#remote button[data-name="{REMOTE_PREFIX}…"]'))
+        field = DRIVER.find_element(By.ID, 'open-url')
+        self.assertEqual(field.get_attribute('value'), REMOTE_PREFIX)
+        self.assertEqual(js('document.activeElement.id'), 'open-url')
+        name = js('volvis.state.name')
+        msg = lambda: DRIVER.find_element(By.ID, 'status-msg')
+        # a URL the server was not given: refused, one line in the status line
+        field.clear()
+        field.send_keys('http://127.0.0.1:9/elsewhere/x.ome.zarr')
+        click(DRIVER.find_element(By.ID, 'open-url-button'))
+        wait_for('the refusal', lambda: 'not a URL this server was given' in msg().text)
+        self.assertIn('error', msg().get_attribute('class'))
+        # a URL under the prefix, typed: the server tries it (nothing listens): one line
+        field.clear()
+        field.send_keys(REMOTE_PREFIX + 'x.ome.zarr' + Keys.ENTER)
+        wait_for('the door\'s answer', lambda: 'x.ome.zarr' in msg().text and
+                 'not a URL' not in msg().text and 'opening' not in msg().text)
+        self.assertNotIn('\n', msg().text)
+        self.assertEqual(js('volvis.state.name'), name)  # what was open stays open
+        shot('07_remote')
+        js('volvis.errors.length = 0')  # the two expected here; T08 counts its own
 
 
 class T08Panel(unittest.TestCase):

@@ -23,6 +23,7 @@ export class Panel {
     this.bindView();
     this.bindTime();
     this.bindSession();
+    this.bindRemote();
   }
 
   // ---- state ----
@@ -232,6 +233,50 @@ export class Panel {
     }
     if (items.length === 0) items.push(el('li', { className: 'empty', textContent: '(empty)' }));
     this.$('files').replaceChildren(...items);
+    // the top of the root also lists the remote data the server may open
+    if (Array.isArray(msg.remote)) this.showRemote(msg.remote);
+  }
+
+  // ---- remote data (URLs given to `volvis serve`, and --allow-url prefixes) ----
+
+  bindRemote() {
+    const input = this.$('open-url');
+    this.$('open-url-button').addEventListener('click', () => this.openUrl(input.value.trim()));
+    input.addEventListener('keydown', (e) => {
+      if (e.key === 'Enter') this.openUrl(input.value.trim());
+    });
+  }
+
+  openUrl(url) {
+    if (!url) {
+      this.hooks.onInfo('Open URL: give a URL listed under Remote data, or one under a prefix');
+      return;
+    }
+    if (this.conn.send({ type: 'open', url })) {
+      this.opening = url;
+      this.hooks.onInfo(`opening ${url}…`);
+    }
+  }
+
+  /** A given URL opens on click; a prefix fills the URL field for the rest to be typed. */
+  showRemote(remote) {
+    const items = [];
+    for (const r of remote) {
+      if (typeof r.url !== 'string') continue;
+      if (r.prefix) {
+        items.push(this.fileItem(`${r.url}…`, false, null, () => {
+          const input = this.$('open-url');
+          input.value = r.url;
+          input.focus();
+          input.setSelectionRange(r.url.length, r.url.length);
+        }, `Type a URL under ${r.url}`, 'prefix'));
+      } else {
+        items.push(this.fileItem(r.url, false, null, () => this.openUrl(r.url), `Open ${r.url}`,
+          'url'));
+      }
+    }
+    this.$('remote').replaceChildren(...items);
+    this.$('remote-group').hidden = items.length === 0;
   }
 
   showFilesPath() {

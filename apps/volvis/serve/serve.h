@@ -25,6 +25,8 @@
 #define SRV_MSG_MAX 65536
 /** Largest path a message may name, bytes. */
 #define SRV_PATH_MAX 1024
+/** Largest URL a message or the command line may name, bytes. */
+#define SRV_URL_MAX 2048
 /** Sides of the 3-D view and of slice images, pixels. */
 #define SRV_VIEW_MIN 16
 #define SRV_VIEW_MAX 4096
@@ -70,6 +72,8 @@ typedef struct srv_msg {
     double x, y;              /**< PROBE: pixel of the slice image */
     int size;                 /**< THUMBNAILS */
     char path[SRV_PATH_MAX];  /**< LIST, OPEN, SAVE: relative to the root */
+    char url[SRV_URL_MAX];    /**< OPEN: a URL instead of a path ("" none; not yet checked
+                                   against the allowed ones: srv_url_allowed) */
 } srv_msg;
 
 /**
@@ -91,6 +95,65 @@ int srv_msg_parse(const char *text, size_t len, srv_msg *out, char *why, size_t 
  */
 int srv_path_resolve(const char *root, const char *rel, int kind, char *out, size_t cap, char *why,
                      size_t why_cap);
+
+/**
+ * Opens @p rel (relative, no "." or ".." components: srv_path_resolve's
+ * checks) beneath the folder @p dirfd with open(2) @p flags (O_CLOEXEC
+ * added): openat2(2) with RESOLVE_BENEATH | RESOLVE_NO_MAGICLINKS, so no
+ * link, absolute or relative, swapped in at any moment, leads the open out
+ * of @p dirfd (EXDEV, ELOOP); where the kernel has no openat2 (ENOSYS), a
+ * walk of openat(2) with O_NOFOLLOW, component by component, that follows
+ * no link at all (ELOOP). "" is @p dirfd itself. Returns the new fd, or -1
+ * with errno. Reentrant.
+ */
+int srv_open_beneath(int dirfd, const char *rel, int flags);
+
+/** Tests only: 1 makes srv_open_beneath take the walk, as on a kernel without openat2. */
+extern int srv_openat2_off;
+
+/**
+ * Checks scene file @p scene (a real path inside @p root, as
+ * srv_path_resolve gives it) for entries that leave the root: at any depth of
+ * its JSON, every member "file", "image" (a texture) or "volume" (a solid
+ * texture) with a string value, resolved as
+ * the scene loader does (relative to the scene's folder; an absolute path
+ * as it is), must name a path inside @p root, and opening it beneath the
+ * root (srv_open_beneath) must not be refused for a link out; an entry
+ * that is a URL must be allowed (srv_url_allowed with @p urls and
+ * @p prefixes, as the browser's own opens). A scene that
+ * is not JSON, or an entry that does not exist, is left to the door (its
+ * own error). Returns 0, or -1 with one line naming the scene (relative to
+ * the root) and the entry in @p why.
+ */
+int srv_scene_confined(const char *root, const char *scene, char *const *urls, int n_urls,
+                       char *const *prefixes, int n_prefixes, char *why, size_t cap);
+
+/**
+ * The normal form of URL @p in into @p out: scheme http, https or s3
+ * (lower case), host in lower case (an IPv6 literal in brackets; for s3 the
+ * bucket), port (none for s3; the scheme's default dropped), then the path
+ * ("/" when empty) with every percent-escape of an unreserved character
+ * decoded and the others in upper case, then the query as given; a
+ * fragment is dropped. Refused: user information, a percent-encoded "/",
+ * "\" or NUL, a "." or ".." or empty path segment (after decoding), a
+ * backslash, spaces, control and non-ASCII bytes, a malformed escape or
+ * port. Returns 0, or -1 with the reason in @p why. Reentrant.
+ */
+int srv_url_normalize(const char *in, char *out, size_t cap, char *why, size_t why_cap);
+
+/**
+ * 1 when normalised URL @p url (srv_url_normalize) is one of the @p n_urls
+ * given (normalised) or lies under one of the @p n_prefixes prefixes
+ * (normalised, no query): the same scheme, host and port, and a path that
+ * starts with the prefix's on a segment boundary (prefix "/data" or
+ * "/data/" takes "/data/x", never "/database"), without a query. 0
+ * otherwise. Reentrant.
+ */
+int srv_url_allowed(const char *url, char *const *urls, int n_urls, char *const *prefixes,
+                    int n_prefixes);
+
+/** 1 when @p s names a URL (a scheme of letters, digits, "+", "-" or "." then "://"). */
+int srv_is_url(const char *s);
 
 /**
  * 1 when folder @p path holds one dataset rather than files to choose from:
@@ -150,7 +213,11 @@ struct srv_client {
 struct srv_server {
     char root[4096];    /**< real path of --root */
     char web_dir[4096]; /**< the client's files */
-    char initial[4096]; /**< the file opened in every new session ("" none) */
+    char initial[4096]; /**< the file or URL opened in every new session ("" none) */
+    char **urls;        /**< the URLs given on the command line, normalised */
+    int n_urls;
+    char **prefixes; /**< --allow-url prefixes, normalised */
+    int n_prefixes;
     uint64_t memory_limit;
     int shared;
     int threads;

@@ -5,7 +5,8 @@
  * request needs the access token printed at the start (compared in
  * constant time, then kept in an HttpOnly SameSite=Strict cookie); the
  * WebSocket upgrade also needs the page's own Origin. Paths a client names
- * stay inside --root. A malformed message closes that client only.
+ * are opened beneath --root; URLs only as given on the command line or under
+ * --allow-url. A malformed message closes that client only.
  */
 #define _GNU_SOURCE
 #include <errno.h>
@@ -43,14 +44,14 @@ static const cli_opt_spec serve_opts[] = {
     {"allow-remote", 0, NULL}, {"cert", 0, "FILE"},
     {"key", 0, "FILE"},        {"shared", 0, NULL},
     {"threads", 0, "N"},       {"web", 0, "DIR"},
-    {"verbose", 'v', NULL},
+    {"verbose", 'v', NULL},    {"allow-url", 0, "PREFIX"},
 };
 #define N_SERVE_OPTS ((int)(sizeof serve_opts / sizeof serve_opts[0]))
 
 void
 cli_serve_usage(FILE *out) {
     fprintf(out,
-            "usage: volvis serve [OPTIONS] [FILE|SCENE|FOLDER]\n"
+            "usage: volvis serve [OPTIONS] [FILE|SCENE|FOLDER] [URL...]\n"
             "\n"
             "Serves the browser view: prints one URL with a fresh access token (open it in\n"
             "Chromium or Firefox). The page shows a 3-D view (drag to rotate, right-drag or\n"
@@ -62,6 +63,12 @@ cli_serve_usage(FILE *out) {
             "Each browser tab has its own session unless --shared. FILE or SCENE opens in\n"
             "every new session; a FOLDER is the root with nothing open. Runs until Ctrl-C.\n"
             "\n"
+            "URLs (http://, https://, s3://bucket/key) given here are the remote data the\n"
+            "page may open, listed atop its Files; the first opens in every new session when\n"
+            "no FILE or SCENE is given. The page can open no other URL but those under an\n"
+            "--allow-url PREFIX: the server fetches nothing a browser names otherwise.\n"
+            "Files, a scene's files too, are opened beneath the root only (docs/security.md).\n"
+            "\n"
             "Options:\n"
             "  -p, --port N       TCP port (default 8765; 0: any free port)\n"
             "  --bind ADDR        address to listen on (default 127.0.0.1); any other than\n"
@@ -71,6 +78,9 @@ cli_serve_usage(FILE *out) {
             "  --cert FILE, --key FILE  serve HTTPS and WSS with this certificate and key\n"
             "  --root DIR         the folder the file browser, open and save may reach\n"
             "                     (default: FOLDER, else FILE's folder, else the current one)\n"
+            "  --allow-url PREFIX a URL prefix (repeatable) the page may open URLs under, on a\n"
+            "                     path-segment boundary: https://host/data/ takes\n"
+            "                     https://host/data/a.zarr, never https://host/database\n"
             "  --memory-limit BYTES  one budget for the voxels of every session (K, M, G\n"
             "                     suffixes); files open out of core under it\n"
             "  --shared           one session for every tab: people see and steer one view\n"
@@ -82,6 +92,8 @@ cli_serve_usage(FILE *out) {
             "Examples:\n"
             "  volvis serve ../shared/data/volumes/ct_head.nrrd\n"
             "  volvis serve --root /data/scans --memory-limit 4G /data/scans\n"
+            "  volvis serve --memory-limit 4G https://example.org/data/img.ome.zarr\n"
+            "  volvis serve --allow-url s3://bucket/images/ /data/scans\n"
             "  ssh -L 8765:127.0.0.1:8765 server volvis serve big.zarr   # from a laptop\n");
 }
 
@@ -517,9 +529,46 @@ cli_serve_main(int argc, char **argv) {
     }
     if (rc)
         return rc;
-    if (a.n_pos > 1)
-        return cli_usage_error(&a, "expected at most one FILE, SCENE or FOLDER, got %d", a.n_pos);
+    int n_files = 0;
+    const char *input = NULL;
+    for (int i = 0; i < a.n_pos; i++)
+        if (!srv_is_url(a.pos[i])) {
+            n_files++;
+            input = a.pos[i];
+        }
+    if (n_files > 1)
+        return cli_usage_error(&a, "expected at most one FILE, SCENE or FOLDER, got %d", n_files);
     memset(&server, 0, sizeof server);
+    /* for tests and old kernels' behaviour: the walk that replaces openat2 */
+    if (getenv("VOLVIS_SERVE_NO_OPENAT2") && strcmp(getenv("VOLVIS_SERVE_NO_OPENAT2"), "0"))
+        srv_openat2_off = 1;
+    /* the URLs and prefixes, in normal form (what a client's URL is compared with) */
+    server.urls = calloc((size_t)a.n_pos + 1, sizeof *server.urls);
+    server.prefixes = calloc((size_t)cli_count(&a, "allow-url") + 1, sizeof *server.prefixes);
+    if (!server.urls || !server.prefixes) {
+        cli_error("serve: out of memory");
+        return CLI_EXIT_FAIL;
+    }
+    for (int i = 0; i < a.n_pos + a.n_seen; i++) {
+        const char *u = i < a.n_pos ? a.pos[i] : a.seen[i - a.n_pos].value;
+        if (i < a.n_pos ? !srv_is_url(u)
+                        : strcmp(a.specs[a.seen[i - a.n_pos].opt].name, "allow-url") != 0)
+            continue;
+        char norm[SRV_URL_MAX], why[512];
+        if (srv_url_normalize(u, norm, sizeof norm, why, sizeof why))
+            return cli_usage_error(&a, "%s%s", i < a.n_pos ? "" : "--allow-url ", why);
+        if (i >= a.n_pos && strchr(norm, '?'))
+            return cli_usage_error(&a, "--allow-url %s: a prefix has no query", u);
+        char *copy = strdup(norm);
+        if (!copy) {
+            cli_error("serve: out of memory");
+            return CLI_EXIT_FAIL;
+        }
+        if (i < a.n_pos)
+            server.urls[server.n_urls++] = copy;
+        else
+            server.prefixes[server.n_prefixes++] = copy;
+    }
     pthread_mutex_init(&server.lock, NULL);
     /* a remote user chooses the files: every parser, our own too, reads them in the
      * reader sandbox (docs/security.md), unless the environment says otherwise */
@@ -549,7 +598,6 @@ cli_serve_main(int argc, char **argv) {
     server.verbose = cli_count(&a, "verbose") > 0;
 
     /* the data and the root */
-    const char *input = a.n_pos ? a.pos[0] : NULL;
     char real[PATH_MAX];
     struct stat st;
     int folder = 0;
@@ -592,7 +640,22 @@ cli_serve_main(int argc, char **argv) {
         /* a file that does not open is reported now, not in every tab */
         if ((rc = cli_check_readable_input(real)))
             return rc;
+        /* a scene's files are read beneath the root only, as the page's are */
+        char why[1024];
+        if (srv_scene_confined(server.root, real, server.urls, server.n_urls, server.prefixes,
+                               server.n_prefixes, why, sizeof why)) {
+            cli_error("serve: %s (give a --root that holds the scene's files)", why);
+            return CLI_EXIT_USAGE;
+        }
+    } else if (!input && server.n_urls > 0) {
+        /* no file: the first URL opens in every new session (the door's error, if it
+         * cannot, reaches each page as one line) */
+        snprintf(server.initial, sizeof server.initial, "%s", server.urls[0]);
     }
+    /* every reader the door starts reads beneath the root only (its Landlock layer,
+     * src/sandbox/policy.c): a link swapped into the root after the server's check
+     * leads no reader out of it */
+    setenv("VOLVIS_SANDBOX_BENEATH", server.root, 1);
     /* under mpirun: rank 0 serves, the others render with it */
     server.ranks = 1;
     int rank = 0;

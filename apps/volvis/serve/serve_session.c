@@ -12,6 +12,7 @@
 #define _GNU_SOURCE
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <jansson.h>
 #include <limits.h>
 #include <math.h>
@@ -423,10 +424,21 @@ do_open(srv_session *s, const char *path, uint64_t client) {
     vv_time_steps_free(s->ts);
     s->ts = NULL;
     vv_world_open_info opened;
+    /* a scene's files: inside the root, or URLs the server was given */
+    if (!srv_is_url(path) &&
+        srv_scene_confined(s->srv->root, path, s->srv->urls, s->srv->n_urls, s->srv->prefixes,
+                           s->srv->n_prefixes, why, sizeof why)) {
+        pthread_mutex_lock(&s->lock);
+        reply_error(s, client, "open: %s", why);
+        pthread_mutex_unlock(&s->lock);
+        srv_wake(s->srv); /* the service thread sends it now, not at its next wake */
+        return;
+    }
     if (srv_open_world(s->srv, path, &w, &opened, why, sizeof why)) {
         pthread_mutex_lock(&s->lock);
         reply_error(s, client, "%s", why);
         pthread_mutex_unlock(&s->lock);
+        srv_wake(s->srv);
         return;
     }
     double win = 1, lev = 0;
@@ -447,8 +459,15 @@ do_open(srv_session *s, const char *path, uint64_t client) {
         s->height = w->view.height;
     }
     s->home_view = w->view;
-    const char *slash = strrchr(path, '/');
-    snprintf(s->name, sizeof s->name, "%.255s", slash ? slash + 1 : path);
+    /* the name: the last component (a URL's, a store's trailing "/" left out) */
+    size_t pn = strlen(path);
+    while (pn > 1 && path[pn - 1] == '/')
+        pn--;
+    const char *slash = memrchr(path, '/', pn);
+    const char *base = slash ? slash + 1 : path;
+    snprintf(s->name, sizeof s->name, "%.*s",
+             (int)(pn - (size_t)(base - path)) > 255 ? 255 : (int)(pn - (size_t)(base - path)),
+             base);
     snprintf(s->file, sizeof s->file, "%s", path);
     s->preset[0] = '\0';
     s->window = win;
@@ -827,6 +846,7 @@ render_main(void *arg) {
                 pthread_mutex_lock(&s->lock);
                 reply_error(s, 0, "render: %s", vv_error_message());
                 pthread_mutex_unlock(&s->lock);
+                srv_wake(s->srv);
             }
             vv_image_free(img);
             vv_world_free(snap);
@@ -1150,9 +1170,23 @@ send_listing(srv_session *s, srv_client *c, const srv_msg *m) {
         reply_error(s, c->id, "list: %s", why);
         return;
     }
-    DIR *d = opendir(full);
+    /* the folder opened beneath the root (a link swapped in since the check cannot lead
+     * out), its entries looked at through it */
+    char rel[SRV_PATH_MAX];
+    snprintf(rel, sizeof rel, "%s", m->path);
+    for (size_t n = strlen(rel); n > 0 && rel[n - 1] == '/';)
+        rel[--n] = '\0';
+    int rootfd = open(s->srv->root, O_PATH | O_DIRECTORY | O_CLOEXEC);
+    int dfd = rootfd < 0 ? -1 : srv_open_beneath(rootfd, rel, O_RDONLY | O_DIRECTORY);
+    int err = errno;
+    if (rootfd >= 0)
+        close(rootfd);
+    DIR *d = dfd < 0 ? NULL : fdopendir(dfd);
     if (!d) {
-        reply_error(s, c->id, "list: '%s': %s", m->path, strerror(errno));
+        if (dfd >= 0)
+            close(dfd);
+        reply_error(s, c->id, "list: '%s': %s", m->path,
+                    err == EXDEV || err == ELOOP ? "leaves the root folder" : strerror(err));
         return;
     }
     enum { MAX_ENTRIES = 10000 };
@@ -1163,7 +1197,12 @@ send_listing(srv_session *s, srv_client *c, const srv_msg *m) {
         if (e->d_name[0] == '.')
             continue;
         struct stat st;
-        if (fstatat(dirfd(d), e->d_name, &st, 0) != 0)
+        /* a link is shown as what it leads to, and only when that is inside the root */
+        int efd = srv_open_beneath(dirfd(d), e->d_name, O_PATH);
+        int ok = efd >= 0 && fstat(efd, &st) == 0;
+        if (efd >= 0)
+            close(efd);
+        if (!ok)
             continue;
         if (!S_ISDIR(st.st_mode) && !S_ISREG(st.st_mode))
             continue;
@@ -1183,8 +1222,19 @@ send_listing(srv_session *s, srv_client *c, const srv_msg *m) {
     for (int i = 0; i < n; i++)
         json_array_append_new(arr, items[i]);
     free(items);
-    reply_json(s, c->id,
-               json_pack("{s:s, s:s, s:o}", "type", "listing", "path", m->path, "entries", arr));
+    json_t *r = json_pack("{s:s, s:s, s:o}", "type", "listing", "path", m->path, "entries", arr);
+    if (r && !rel[0]) {
+        /* the top of the root: the URLs this server may open, and the prefixes */
+        json_t *remote = json_array();
+        for (int i = 0; i < s->srv->n_urls; i++)
+            json_array_append_new(remote,
+                                  json_pack("{s:s, s:b}", "url", s->srv->urls[i], "prefix", 0));
+        for (int i = 0; i < s->srv->n_prefixes; i++)
+            json_array_append_new(remote,
+                                  json_pack("{s:s, s:b}", "url", s->srv->prefixes[i], "prefix", 1));
+        json_object_set_new(r, "remote", remote);
+    }
+    reply_json(s, c->id, r);
 }
 
 static void
@@ -1210,8 +1260,29 @@ save_session(srv_session *s, srv_client *c, const srv_msg *m) {
         if (o->type == VV_OBJECT_VOLUME && !o->geometry.source)
             files[i] = s->file;
     }
+    /* written through its folder opened beneath the root (/proc/self/fd/N/NAME: the
+     * temporary file and the rename go where the check looked, whatever link is swapped
+     * in since) */
+    char rel[SRV_PATH_MAX];
+    snprintf(rel, sizeof rel, "%s", m->path);
+    char *slash = strrchr(rel, '/');
+    const char *base = slash ? slash + 1 : rel;
+    if (slash)
+        *slash = '\0';
+    int rootfd = open(s->srv->root, O_PATH | O_DIRECTORY | O_CLOEXEC);
+    int dfd = rootfd < 0 ? -1 : srv_open_beneath(rootfd, slash ? rel : "", O_PATH | O_DIRECTORY);
+    if (rootfd >= 0)
+        close(rootfd);
+    char pinned[64 + SRV_PATH_MAX];
+    if (dfd < 0) {
+        free(files);
+        reply_error(s, c->id, "save: '%s' leaves the root folder", m->path);
+        return;
+    }
+    snprintf(pinned, sizeof pinned, "/proc/self/fd/%d/%s", dfd, base);
     vv_error_clear();
-    vv_status st = vv_scene_save(s->world, full, files);
+    vv_status st = vv_scene_save(s->world, pinned, files);
+    close(dfd);
     free(files);
     if (st != VV_OK) {
         reply_error(s, c->id, "save: %s: %s", m->path, vv_error_message());
@@ -1356,7 +1427,22 @@ srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m) {
         break;
     case SRV_OPEN: {
         char full[4096], why[512];
-        if (srv_path_resolve(s->srv->root, m->path, 0, full, sizeof full, why, sizeof why)) {
+        if (m->url[0]) {
+            /* a URL: only one given on the command line or under --allow-url; the
+             * normal form is what the door is handed, so what was checked is fetched */
+            if (srv_url_normalize(m->url, full, sizeof full, why, sizeof why)) {
+                reply_error(s, c->id, "open: %s", why);
+                break;
+            }
+            if (!srv_url_allowed(full, s->srv->urls, s->srv->n_urls, s->srv->prefixes,
+                                 s->srv->n_prefixes)) {
+                reply_error(s, c->id,
+                            "open: '%.300s' is not a URL this server was given (volvis serve "
+                            "URL, or --allow-url PREFIX)",
+                            full);
+                break;
+            }
+        } else if (srv_path_resolve(s->srv->root, m->path, 0, full, sizeof full, why, sizeof why)) {
             reply_error(s, c->id, "open: %s", why);
             break;
         }
