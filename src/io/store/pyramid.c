@@ -38,6 +38,7 @@
 
 #include "core/cache.h"
 #include "core/internal.h"
+#include "io/store/bytesrc.h"
 #include "io/store/pyramid.h"
 #include "io/store/pyramid_internal.h"
 #include "volvis/bricks.h"
@@ -127,9 +128,10 @@ decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *
     long long first = -1;
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
+    const int cores = st->parallel > omp_get_max_threads() ? st->parallel : omp_get_max_threads();
     const int nthreads = !st->parallel || st->scratch > ((size_t)64 << 20) || n < 2 ? 1
-                         : omp_get_max_threads() < n ? omp_get_max_threads()
-                                                     : n;
+                         : cores < n                                                ? cores
+                                                                                    : n;
 #pragma omp parallel num_threads(nthreads)
     {
         unsigned char *buf = st->scratch ? malloc(st->scratch) : NULL;
@@ -512,8 +514,8 @@ vv_store_read_level(vv_store *st, int level, vv_volume **out) {
 vv_status
 vv_pyramid_prefix(vv_status s, const char *name, const char *path) {
     char head[512];
-    const int n = snprintf(head, sizeof head, "%s: %s:", name, vv_path_basename(path));
+    const int n = snprintf(head, sizeof head, "%s: %s:", name, bs_name(path));
     if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
         return s;
-    return vv_error_prefix(s, "%s: %s", name, vv_path_basename(path));
+    return vv_error_prefix(s, "%s: %s", name, bs_name(path));
 }

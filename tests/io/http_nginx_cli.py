@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""OME-Zarr stores served by nginx over HTTP and HTTPS, read by URL.
+
+  http_nginx_cli.py VOLVIS OUTDIR
+
+Run with the .venv of scripts/install-deps.sh test (vv_pypi_test). zarr-python 3
+writes a sharded + zstd NGFF 0.5 pyramid (3 levels) and its Zarr v2 twin; nginx
+(Debian's nginx-light, one process, a configuration of its own in OUTDIR, a free
+loopback port; not the system's service) serves OUTDIR over HTTP and over HTTPS
+with a test CA made here with openssl. Checked:
+
+- `volvis info URL` is `volvis info DIR` but for the name, v3 and v2, HTTP and HTTPS;
+- `volvis render URL` (MIP, composite; whole and out of core) is the local render's
+  PNG byte for byte; `volvis convert URL --level 2 out.nrrd` the local one's voxels;
+- nginx's access log: the shards are read by range (206 with a Range header), and
+  reading level 2 fetches no shard of levels 0 and 1;
+- HTTPS without the test CA: one line naming the URL (the certificate refused);
+  a store that is not there: one line naming the URL.
+"""
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+try:
+    import numpy as np  # noqa: F401
+    import zarr  # noqa: F401
+except ImportError as e:  # pragma: no cover
+    print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
+    sys.exit(77)
+from cli_common import Checks, read_nrrd  # noqa: E402
+from http_common import free_port, make_ca, wait_port, write_stores  # noqa: E402
+
+NGINX = shutil.which("nginx") or ("/usr/sbin/nginx" if os.path.exists("/usr/sbin/nginx") else None)
+if not NGINX:
+    print("skipped: nginx is missing (apt-get install nginx-light)")
+    sys.exit(77)
+
+VOLVIS, OUT = sys.argv[1], os.path.abspath(sys.argv[2])
+shutil.rmtree(OUT, ignore_errors=True)
+os.makedirs(OUT)
+check = Checks()
+www = os.path.join(OUT, "www")
+os.makedirs(www)
+v3, v2 = write_stores(www)
+ca, crt, key = make_ca(OUT)
+port, sport = free_port(), free_port()
+log = os.path.join(OUT, "access.log")
+conf = os.path.join(OUT, "nginx.conf")
+with open(conf, "w") as f:
+    f.write(f"""daemon off;
+master_process off;
+worker_processes 1;
+pid {OUT}/nginx.pid;
+error_log {OUT}/error.log;
+events {{ worker_connections 256; }}
+http {{
+  log_format ranges '$status $request_method "$uri" "$http_range" $body_bytes_sent';
+  access_log {log} ranges;
+  client_body_temp_path {OUT}/tmp_body;
+  proxy_temp_path {OUT}/tmp_proxy;
+  fastcgi_temp_path {OUT}/tmp_fcgi;
+  uwsgi_temp_path {OUT}/tmp_uwsgi;
+  scgi_temp_path {OUT}/tmp_scgi;
+  default_type application/octet-stream;
+  server {{ listen 127.0.0.1:{port}; root {www}; }}
+  server {{
+    listen 127.0.0.1:{sport} ssl http2;
+    ssl_certificate {crt};
+    ssl_certificate_key {key};
+    root {www};
+  }}
+}}
+""")
+nginx = subprocess.Popen([NGINX, "-c", conf, "-p", OUT, "-e", f"{OUT}/error.log"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+env = {k: v for k, v in os.environ.items() if not k.lower().endswith("_proxy")}
+env["SSL_CERT_FILE"] = env["CURL_CA_BUNDLE"] = ca
+
+
+def volvis(*args, e=None):
+    return subprocess.run([VOLVIS, *args], capture_output=True, text=True, env=e or env,
+                          timeout=300)
+
+
+def log_lines():
+    with open(log) as f:
+        return f.read().splitlines()
+
+
+def one_line(p, needle, what):
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    check(p.returncode != 0 and len(lines) == 1 and needle in lines[0],
+          f"{what}: one line naming {needle} ({lines[:3]}, exit {p.returncode})")
+
+
+try:
+    if not (wait_port(port, nginx) and wait_port(sport, nginx)):
+        print("nginx did not start:", nginx.stderr.read().decode() if nginx.stderr else "")
+        sys.exit(1)
+    http = f"http://127.0.0.1:{port}"
+    https = f"https://127.0.0.1:{sport}"
+    for name, local in (("v3", v3), ("v2", v2)):
+        base = os.path.basename(local)
+        pl = volvis("info", local)
+        for scheme, root in (("http", http), ("https", https)):
+            url = f"{root}/{base}"
+            pu = volvis("info", url)
+            check(pl.returncode == 0 and pu.returncode == 0 and
+                  pu.stdout.replace(url, local) == pl.stdout and "levels" in pl.stdout.lower(),
+                  f"info {name} over {scheme} equals the local info but for the name "
+                  f"({pu.stderr.strip()})")
+        url = f"{http}/{base}"
+        for mode, extra in (("mip", ["--mode", "mip", "--tf", "50:1000"]),
+                            ("composite", ["--mode", "composite", "--tf", "50:1000"]),
+                            ("mip-ooc", ["--mode", "mip", "--tf", "50:1000", "--memory-limit",
+                                         "64M", "--level", "0"])):
+            a, b = (os.path.join(OUT, f"{name}_{mode}_{w}.png") for w in ("local", "url"))
+            p1 = volvis("render", local, "-o", a, "--size", "96x96", *extra)
+            p2 = volvis("render", url, "-o", b, "--size", "96x96", *extra)
+            same = p1.returncode == 0 and p2.returncode == 0 and \
+                open(a, "rb").read() == open(b, "rb").read()
+            check(same, f"render {name} {mode} by URL is the local PNG byte for byte "
+                  f"({p1.stderr.strip()} {p2.stderr.strip()})")
+    # the same over HTTPS (HTTP/2 where nginx offers it)
+    a, b = (os.path.join(OUT, f"tls_{w}.png") for w in ("local", "url"))
+    p1 = volvis("render", v3, "-o", a, "--size", "96x96", "--mode", "mip")
+    p2 = volvis("render", f"{https}/pyr3.ome.zarr", "-o", b, "--size", "96x96", "--mode", "mip")
+    check(p1.returncode == 0 and p2.returncode == 0 and
+          open(a, "rb").read() == open(b, "rb").read(),
+          f"render over HTTPS with the test CA is the local PNG ({p2.stderr.strip()})")
+    # shards by range; level 2 alone reads no shard of levels 0 and 1
+    open(log, "w").close()
+    os.kill(nginx.pid, signal.SIGUSR1)  # reopen the log
+    import time
+    time.sleep(0.3)
+    for lvl in ("2",):
+        o1, o2 = (os.path.join(OUT, f"l{lvl}_{w}.nrrd") for w in ("local", "url"))
+        p1 = volvis("convert", v3, o1, "--level", lvl, "--quiet")
+        p2 = volvis("convert", f"{http}/pyr3.ome.zarr", o2, "--level", lvl, "--quiet")
+        ok = p1.returncode == 0 and p2.returncode == 0
+        if ok:
+            x1, s1, g1 = read_nrrd(o1)
+            x2, s2, g2 = read_nrrd(o2)
+            ok = np.array_equal(x1, x2) and s1 == s2 and g1 == g2
+        check(ok, f"convert --level {lvl} by URL equals the local read ({p2.stderr.strip()})")
+    lines = log_lines()
+    shard = re.compile(r'^(\d+) GET "/pyr3\.ome\.zarr/(\d)/c/[0-9/]+" "([^"]*)"')
+    reads = [shard.match(ln) for ln in lines]
+    reads = [m for m in reads if m]
+    check(len(reads) > 0 and all(m.group(1) == "206" and m.group(3).startswith("bytes=")
+                                 for m in reads),
+          f"every shard read is a range answered 206 ({len(reads)} reads; "
+          f"{[m.group(0) for m in reads if m.group(1) != '206'][:3]})")
+    finer = [m.group(0) for m in reads if m.group(2) in ("0", "1")]
+    check(not finer and any(m.group(2) == "2" for m in reads),
+          f"reading level 2 fetches no shard of levels 0 and 1 ({finer[:3]})")
+    # refusals: one line naming the URL
+    noca = {k: v for k, v in env.items() if k not in ("SSL_CERT_FILE", "CURL_CA_BUNDLE")}
+    noca["SSL_CERT_FILE"] = noca["CURL_CA_BUNDLE"] = "/etc/ssl/certs/ca-certificates.crt"
+    one_line(volvis("info", f"{https}/pyr3.ome.zarr", e=noca), f"{https}/pyr3.ome.zarr",
+             "HTTPS with a certificate no CA of the system's signed")
+    one_line(volvis("info", f"{http}/nothing.ome.zarr"), f"{http}/nothing.ome.zarr",
+             "a store that is not there")
+finally:
+    nginx.terminate()
+    try:
+        nginx.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        nginx.kill()
+check.finish("http_nginx_cli")
