@@ -80,6 +80,15 @@ usage(FILE *out) {
                  "our own formats (SLC, MetaImage, VTK, OpenDX, PLOT3D, raw, .vvb) there too\n"
                  "(docs/security.md).\n"
                  "\n"
+                 "An OME-Zarr store may be a URL wherever a file is taken: http://,\n"
+                 "https:// or s3://BUCKET/KEY (fetched by byte range in this process,\n"
+                 "TLS verified). The environment sets the transport: VOLVIS_HTTP_MAX_IN_FLIGHT\n"
+                 "(32), VOLVIS_HTTP_RETRIES (3), VOLVIS_HTTP_CONNECT_TIMEOUT (10 s),\n"
+                 "VOLVIS_HTTP_LOW_SPEED_TIME (10 s) and _LIMIT (256 B/s), CURL_CA_BUNDLE,\n"
+                 "proxies as curl reads them; S3: AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY,\n"
+                 "AWS_SESSION_TOKEN, AWS_PROFILE, AWS_REGION, AWS_ENDPOINT_URL,\n"
+                 "AWS_NO_SIGN_REQUEST=YES (docs/cli.md, \"Remote stores\").\n"
+                 "\n"
                  "Exit status: 0 success, 1 bad input (file, format or render error),\n"
                  "2 bad usage, 130 interrupted. Errors are one line on stderr.\n");
 }

@@ -10,8 +10,8 @@ loopback port; not the system's service) serves OUTDIR over HTTP and over HTTPS
 with a test CA made here with openssl. Checked:
 
 - `volvis info URL` is `volvis info DIR` but for the name, v3 and v2, HTTP and HTTPS;
-- `volvis render URL` (MIP, composite; whole and out of core) is the local render's
-  PNG byte for byte; `volvis convert URL --level 2 out.nrrd` the local one's voxels;
+- `volvis render URL` (MIP, composite; whole and out of core; on 2 MPI ranks when
+  mpirun is there) and `volvis slice URL` are the local PNGs byte for byte; `volvis convert URL --level 2 out.nrrd` the local one's voxels;
 - nginx's access log: the shards are read by range (206 with a Range header), and
   reading level 2 fetches no shard of levels 0 and 1;
 - HTTPS without the test CA: one line naming the URL (the certificate refused);
@@ -132,6 +132,26 @@ try:
     check(p1.returncode == 0 and p2.returncode == 0 and
           open(a, "rb").read() == open(b, "rb").read(),
           f"render over HTTPS with the test CA is the local PNG ({p2.stderr.strip()})")
+    # slice, and MPI ranks (each opens the URL through the same door)
+    a, b = (os.path.join(OUT, f"slice_{w}.png") for w in ("local", "url"))
+    p1 = volvis("slice", v3, "-o", a)
+    p2 = volvis("slice", f"{http}/pyr3.ome.zarr", "-o", b)
+    check(p1.returncode == 0 and p2.returncode == 0 and
+          open(a, "rb").read() == open(b, "rb").read(),
+          f"slice by URL is the local PNG ({p2.stderr.strip()})")
+    mpirun = shutil.which("mpirun")
+    if mpirun:
+        a, b = (os.path.join(OUT, f"mpi_{w}.png") for w in ("local", "url"))
+        how = ["--size", "96x96", "--mode", "mip"]
+        run = [mpirun, "--oversubscribe", "-n", "2"] + (["--allow-run-as-root"]
+                                                         if os.geteuid() == 0 else [])
+        p1 = subprocess.run(run + [VOLVIS, "render", v3, "-o", a, *how], capture_output=True,
+                            text=True, env=env, timeout=120)
+        p2 = subprocess.run(run + [VOLVIS, "render", f"{http}/pyr3.ome.zarr", "-o", b, *how],
+                            capture_output=True, text=True, env=env, timeout=120)
+        check(p1.returncode == 0 and p2.returncode == 0 and "2 ranks" in p2.stdout and
+              open(a, "rb").read() == open(b, "rb").read(),
+              f"render by URL on 2 MPI ranks is the local PNG ({p2.stderr.strip()[-300:]})")
     # shards by range; level 2 alone reads no shard of levels 0 and 1
     open(log, "w").close()
     os.kill(nginx.pid, signal.SIGUSR1)  # reopen the log

@@ -191,7 +191,11 @@ decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *
     pthread_mutex_init(&j.lock, NULL);
     const int big = st->scratch > ((size_t)64 << 20);
     if (st->parallel > 1 && !big && n > 1) {
-        const int want = st->parallel < n ? st->parallel : n;
+        int want = st->parallel < n ? st->parallel : n;
+        /* each thread holds a chunk's scratch: at most a quarter of the budget */
+        const uint64_t quarter = vv_memory_budget_get() / 4;
+        if (st->scratch && (uint64_t)want * st->scratch > quarter)
+            want = quarter / st->scratch > 1 ? (int)(quarter / st->scratch) : 1;
         pthread_t th[64];
         int started = 0;
         for (int t = 1; t < want && t < 64; t++)

@@ -190,6 +190,10 @@ start_loaders(vv_pyramid *p) {
     n = n < 1 ? 1 : n > PY_LOADERS_MAX ? PY_LOADERS_MAX : n;
     if (p->store.parallel <= 1 && n > 4)
         n = 4;
+    /* each loader holds a chunk's scratch: at most a quarter of the budget */
+    const uint64_t quarter = vv_memory_budget_get() / 4;
+    if (p->store.scratch && (uint64_t)n * p->store.scratch > quarter)
+        n = quarter / p->store.scratch > 1 ? (int)(quarter / p->store.scratch) : 1;
     if (p->store.scratch > ((size_t)64 << 20))
         n = 1;
     for (int i = 0; i < n; i++) {
