@@ -126,8 +126,7 @@ cli_check_readable(const char *path) {
 int
 cli_check_readable_input(const char *path) {
     /* a remote store (http://, https://, s3://): the library fetches it */
-    if (!strncasecmp(path, "http://", 7) || !strncasecmp(path, "https://", 8) ||
-        !strncasecmp(path, "s3://", 5))
+    if (vv_path_is_url(path))
         return 0;
     struct stat st;
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {

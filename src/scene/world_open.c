@@ -15,7 +15,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "io/store/bytesrc.h"
 #include "volvis/io.h"
 #include "volvis/model.h"
 #include "volvis/parallel.h"
@@ -61,7 +60,7 @@ misfit(vv_world_open_info *info, const char *what, const char *reason) {
 /* A readable file, or a readable and searchable folder. */
 static vv_status
 check_readable(const char *path, int folder_ok) {
-    if (bs_is_url(path)) /* a remote store: its reader fetches */
+    if (vv_path_is_url(path)) /* a remote store: its reader fetches */
         return VV_OK;
     struct stat st;
     if (stat(path, &st) != 0)
@@ -82,7 +81,7 @@ check_readable(const char *path, int folder_ok) {
 static int
 is_scene_file(const char *path) {
     size_t n = strlen(path);
-    if (bs_is_url(path))
+    if (vv_path_is_url(path))
         return 0;
     if (n >= 5 && strcasecmp(path + n - 5, ".json") == 0)
         return 1;

@@ -85,6 +85,13 @@ test_s3_addressing(void **state) {
     assert_int_equal(bs_target_parse(&t, "http://example.org:8080", "http://127.0.0.1:9000", NULL),
                      VV_OK);
     assert_false(t.s3);
+    /* the door: a URL is the Zarr row, nothing local looked at */
+    assert_true(vv_path_is_url("HTTPS://h/x") && vv_path_is_url("s3://b/k") &&
+                vv_path_is_url("http://h"));
+    assert_false(vv_path_is_url("/tmp/http://x") || vv_path_is_url("file:///x") ||
+                 vv_path_is_url(NULL));
+    assert_int_equal(vv_format_detect("http://127.0.0.1:9/none.ome.zarr"), VV_FORMAT_OME_ZARR);
+    assert_int_equal(vv_format_detect("s3://b/none.zarr"), VV_FORMAT_OME_ZARR);
     /* refused */
     assert_int_equal(bs_target_parse(&t, "s3:///key", NULL, NULL), VV_ERR_INVALID);
     assert_int_equal(bs_target_parse(&t, "s3://bad bucket/key", NULL, NULL), VV_ERR_INVALID);

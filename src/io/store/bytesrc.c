@@ -16,6 +16,12 @@
 
 #include "core/internal.h"
 #include "io/store/bytesrc.h"
+#include "volvis/io.h"
+
+int
+vv_path_is_url(const char *path) {
+    return bs_is_url(path);
+}
 
 int
 bs_is_url(const char *path) {
