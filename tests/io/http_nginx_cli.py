@@ -14,6 +14,8 @@ with a test CA made here with openssl. Checked:
   mpirun is there) and `volvis slice URL` are the local PNGs byte for byte; `volvis convert URL --level 2 out.nrrd` the local one's voxels;
 - nginx's access log: the shards are read by range (206 with a Range header), and
   reading level 2 fetches no shard of levels 0 and 1;
+- `--cache-dir`: a second read is answered 304 (If-None-Match) and read from the cache,
+  the same voxels; VOLVIS_HTTP_CACHE_MAX bounds it;
 - HTTPS without the test CA: one line naming the URL (the certificate refused);
   a store that is not there: one line naming the URL.
 """
@@ -178,6 +180,33 @@ try:
     finer = [m.group(0) for m in reads if m.group(2) in ("0", "1")]
     check(not finer and any(m.group(2) == "2" for m in reads),
           f"reading level 2 fetches no shard of levels 0 and 1 ({finer[:3]})")
+    # --cache-dir: a second read sends If-None-Match and takes the bytes from the
+    # cache on 304; a small bound is kept
+    cache = os.path.join(OUT, "cache")
+    o1, o2, o3 = (os.path.join(OUT, f"cache{i}.nrrd") for i in (1, 2, 3))
+    p1 = volvis("convert", f"{http}/pyr3.ome.zarr", o1, "--level", "2", "--quiet",
+                "--cache-dir", cache)
+    open(log, "w").close()
+    os.kill(nginx.pid, signal.SIGUSR1)
+    time.sleep(0.3)
+    p2 = volvis("--cache-dir", cache, "convert", f"{http}/pyr3.ome.zarr", o2, "--level", "2",
+                "--quiet")
+    reads = [m for m in (shard.match(ln) for ln in log_lines()) if m]
+    ok = p1.returncode == 0 and p2.returncode == 0 and \
+        np.array_equal(read_nrrd(o1)[0], read_nrrd(o2)[0]) and \
+        np.array_equal(read_nrrd(o2)[0], read_nrrd(os.path.join(OUT, "l2_local.nrrd"))[0])
+    check(ok and reads and all(m.group(1) == "304" for m in reads),
+          f"--cache-dir: the second read's shard requests are all answered 304 from the cache "
+          f"({len(reads)} reads, {sorted(set(m.group(1) for m in reads))}; "
+          f"{p2.stderr.strip()})")
+    small = os.path.join(OUT, "cache_small")
+    e = dict(env, VOLVIS_HTTP_CACHE_MAX="40K")
+    p3 = subprocess.run([VOLVIS, "--cache-dir", small, "convert", f"{http}/pyr3.ome.zarr", o3,
+                         "--level", "0", "--quiet"], capture_output=True, text=True, env=e,
+                        timeout=300)
+    held = sum(os.path.getsize(os.path.join(small, f)) for f in os.listdir(small))
+    check(p3.returncode == 0 and 0 < held <= 40 * 1024,
+          f"--cache-dir within VOLVIS_HTTP_CACHE_MAX=40K: {held} bytes held ({p3.stderr.strip()})")
     # refusals: one line naming the URL
     noca = {k: v for k, v in env.items() if k not in ("SSL_CERT_FILE", "CURL_CA_BUNDLE")}
     noca["SSL_CERT_FILE"] = noca["CURL_CA_BUNDLE"] = "/etc/ssl/certs/ca-certificates.crt"

@@ -24,13 +24,18 @@
  * URL: what" or "s3: s3://BUCKET/KEY: what"; credentials never appear.
  */
 #include <ctype.h>
+#include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <curl/curl.h>
 
@@ -46,7 +51,14 @@
 static struct {
     int in_flight, retries;
     long connect_timeout, low_speed_time, low_speed_limit;
+    char cache_dir[4096]; /* "" no cache on disk */
+    uint64_t cache_max;
 } cfg;
+
+/* The on-disk cache of fetched bytes: its size kept under cfg.cache_max. */
+static pthread_mutex_t cache_lock = PTHREAD_MUTEX_INITIALIZER;
+static int cache_scanned;
+static uint64_t cache_total; /* bytes of its entries: scanned once, then counted */
 static pthread_once_t cfg_once = PTHREAD_ONCE_INIT;
 
 /* The integer of environment variable @p name in [lo, hi], else @p def. */
@@ -71,6 +83,17 @@ cfg_init(void) {
     cfg.connect_timeout = env_long("VOLVIS_HTTP_CONNECT_TIMEOUT", 10, 1, 600);
     cfg.low_speed_time = env_long("VOLVIS_HTTP_LOW_SPEED_TIME", 10, 1, 600);
     cfg.low_speed_limit = env_long("VOLVIS_HTTP_LOW_SPEED_LIMIT", 256, 1, 1L << 30);
+    const char *d = getenv("VOLVIS_HTTP_CACHE_DIR");
+    if (d && *d && strlen(d) < sizeof cfg.cache_dir - 64) {
+        snprintf(cfg.cache_dir, sizeof cfg.cache_dir, "%s", d);
+        mkdir(d, 0700);
+        struct stat st;
+        if (stat(d, &st) != 0 || !S_ISDIR(st.st_mode) || access(d, W_OK | X_OK) != 0)
+            cfg.cache_dir[0] = '\0'; /* not usable: no cache, reads go on */
+    }
+    uint64_t mx = 0;
+    const char *m = getenv("VOLVIS_HTTP_CACHE_MAX");
+    cfg.cache_max = m && vv_memory_size_parse(m, &mx) == VV_OK && mx > 0 ? mx : (1ull << 30);
 }
 
 int
@@ -408,6 +431,9 @@ typedef struct xfer {
     char errbuf[CURL_ERROR_SIZE];
     vv_status status;
     char msg[3200];
+    /* the on-disk cache: the entry's file and ETag when one is held */
+    char cache_file[4200], cache_key[8500], cache_etag[128];
+    int cached;
 } xfer;
 
 static double
@@ -415,6 +441,165 @@ now_s(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---- the on-disk cache ----------------------------------------------------------------- */
+
+/* FNV-1a (64 bits) of @p s. */
+static uint64_t
+fnv1a(const char *s) {
+    uint64_t h = 1469598103934665603ull;
+    for (; *s; s++)
+        h = (h ^ (unsigned char)*s) * 1099511628211ull;
+    return h;
+}
+
+/* @p x's entry: its key (the URL asked and the range) and file; its ETag
+ * when the cache holds it (x->cached). */
+static void
+cache_lookup(xfer *x) {
+    x->cached = 0;
+    if (!cfg.cache_dir[0] || x->g->len == 0)
+        return;
+    snprintf(x->cache_key, sizeof x->cache_key, "%s\n%llu %llu", x->url,
+             (unsigned long long)x->g->off, (unsigned long long)x->g->len);
+    snprintf(x->cache_file, sizeof x->cache_file, "%s/%016llx.vvhc", cfg.cache_dir,
+             (unsigned long long)fnv1a(x->cache_key));
+    FILE *f = fopen(x->cache_file, "rb");
+    if (!f)
+        return;
+    char head[9000];
+    const size_t n = fread(head, 1, sizeof head - 1, f);
+    fclose(f);
+    head[n] = '\0';
+    const size_t kn = strlen(x->cache_key);
+    if (strncmp(head, "VVHC1\n", 6) || strncmp(head + 6, x->cache_key, kn) || head[6 + kn] != '\n')
+        return; /* another key of the same hash, or not an entry */
+    const char *e = head + 6 + kn + 1, *nl = strchr(e, '\n');
+    if (!nl || nl == e || (size_t)(nl - e) >= sizeof x->cache_etag)
+        return;
+    memcpy(x->cache_etag, e, (size_t)(nl - e));
+    x->cache_etag[nl - e] = '\0';
+    x->cached = 1;
+}
+
+/* The body of @p x's entry into its get (the server said 304); 0 when the
+ * entry is gone or not what was asked. */
+static int
+cache_load(xfer *x) {
+    FILE *f = fopen(x->cache_file, "rb");
+    if (!f)
+        return 0;
+    char line[8600];
+    unsigned long long size = 0;
+    int ok = fgets(line, sizeof line, f) && !strcmp(line, "VVHC1\n");
+    for (int i = 0; ok && i < 3; i++) /* the key's two lines, the ETag */
+        ok = fgets(line, sizeof line, f) != NULL;
+    ok = ok && fscanf(f, "%llu", &size) == 1 && fgetc(f) == '\n';
+    const long at = ok ? ftell(f) : -1;
+    struct stat st;
+    ok = ok && at > 0 && fstat(fileno(f), &st) == 0 && st.st_size >= at;
+    const uint64_t n = ok ? (uint64_t)(st.st_size - at) : 0;
+    bs_get *g = x->g;
+    ok = ok && n <= g->max && (g->len == BS_ALL || n == g->len);
+    unsigned char *b = ok ? malloc(n ? (size_t)n : 1) : NULL;
+    ok = b && fread(b, 1, (size_t)n, f) == n;
+    fclose(f);
+    if (!ok) {
+        free(b);
+        return 0;
+    }
+    g->out = b;
+    g->n = (size_t)n;
+    g->size = size;
+    utimensat(AT_FDCWD, x->cache_file, NULL, 0); /* used: the last to go */
+    return 1;
+}
+
+/* The cache's entries counted (cache_total) and, when over its bound, the
+ * oldest removed until it holds at most 90 % of it (cache_lock held). */
+static void
+cache_evict(void) {
+    DIR *d = opendir(cfg.cache_dir);
+    if (!d)
+        return;
+    typedef struct {
+        time_t t;
+        uint64_t n;
+        char name[64];
+    } ent;
+    ent *v = NULL;
+    size_t k = 0, cap = 0;
+    uint64_t total = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        const size_t ln = strlen(e->d_name);
+        if (ln < 6 || ln >= 64 || strcmp(e->d_name + ln - 5, ".vvhc"))
+            continue;
+        char p[4200];
+        snprintf(p, sizeof p, "%s/%s", cfg.cache_dir, e->d_name);
+        struct stat st;
+        if (stat(p, &st) != 0)
+            continue;
+        if (k == cap) {
+            cap = cap ? cap * 2 : 256;
+            ent *w = realloc(v, cap * sizeof *v);
+            if (!w)
+                break;
+            v = w;
+        }
+        v[k].t = st.st_mtime;
+        v[k].n = (uint64_t)st.st_size;
+        snprintf(v[k].name, sizeof v[k].name, "%s", e->d_name);
+        total += v[k++].n;
+    }
+    closedir(d);
+    /* over the bound: the oldest go, down to 90 % of it */
+    const int over = total > cfg.cache_max;
+    while (over && total > cfg.cache_max / 10 * 9 && k > 0) {
+        size_t old = 0;
+        for (size_t i = 1; i < k; i++)
+            if (v[i].t < v[old].t)
+                old = i;
+        char p[4200];
+        snprintf(p, sizeof p, "%s/%s", cfg.cache_dir, v[old].name);
+        if (unlink(p) == 0 || errno == ENOENT)
+            total -= v[old].n;
+        v[old] = v[--k];
+    }
+    free(v);
+    cache_total = total;
+    cache_scanned = 1;
+}
+
+/* @p x's bytes (its get's) kept with ETag @p etag, written whole then
+ * renamed into place; the cache kept under its bound. */
+static void
+cache_store(xfer *x, const char *etag) {
+    const bs_get *g = x->g;
+    if (!cfg.cache_dir[0] || !etag[0] || !x->cache_file[0] || g->len == 0 || !g->out ||
+        (uint64_t)g->n > cfg.cache_max / 4)
+        return;
+    static atomic_uint seq;
+    char tmp[4300];
+    snprintf(tmp, sizeof tmp, "%s/.tmp.%ld.%u", cfg.cache_dir, (long)getpid(),
+             atomic_fetch_add(&seq, 1));
+    FILE *f = fopen(tmp, "wb");
+    if (!f)
+        return;
+    const int hn = fprintf(f, "VVHC1\n%s\n%s\n%llu\n", x->cache_key, etag,
+                           (unsigned long long)(g->size == UINT64_MAX ? 0 : g->size));
+    int ok = hn > 0 && fwrite(g->out, 1, g->n, f) == g->n;
+    ok = fclose(f) == 0 && ok;
+    if (!ok || rename(tmp, x->cache_file) != 0) {
+        unlink(tmp);
+        return;
+    }
+    pthread_mutex_lock(&cache_lock);
+    cache_total += (uint64_t)g->n + (uint64_t)hn;
+    if (!cache_scanned || cache_total > cfg.cache_max)
+        cache_evict(); /* counts what is there (other processes' too), removes the oldest */
+    pthread_mutex_unlock(&cache_lock);
 }
 
 static size_t
@@ -503,6 +688,11 @@ start(bs_http *s, CURLM *m, xfer *x) {
     http_resp_init(&x->r, g->off, g->len, g->max, ranged, head);
     curl_slist_free_all(x->hdrs);
     x->hdrs = NULL;
+    if (x->cached) { /* the cache's copy, if the server says it is still the object */
+        char h[200];
+        snprintf(h, sizeof h, "If-None-Match: %s", x->cache_etag);
+        x->hdrs = curl_slist_append(x->hdrs, h);
+    }
     if (s->t.sign) {
         char sig[128];
         snprintf(sig, sizeof sig, "aws:amz:%s:s3", s->t.region);
@@ -518,8 +708,9 @@ start(bs_http *s, CURLM *m, xfer *x) {
             snprintf(h, sizeof h, "x-amz-security-token: %s", s->t.token);
             x->hdrs = curl_slist_append(x->hdrs, h);
         }
-        curl_easy_setopt(e, CURLOPT_HTTPHEADER, x->hdrs);
     }
+    if (x->hdrs)
+        curl_easy_setopt(e, CURLOPT_HTTPHEADER, x->hdrs);
     x->started = 1;
     if (curl_multi_add_handle(m, e) != CURLM_OK) {
         fail(s, x, VV_ERR_IO, "cannot start the transfer");
@@ -602,6 +793,16 @@ finish(bs_http *s, CURLM *m, xfer *x, CURLcode rc) {
     curl_easy_getinfo(x->e, CURLINFO_RESPONSE_CODE, &code);
     char what[800];
     int retry = 0;
+    if (rc == CURLE_OK && code == 304 && x->cached) {
+        if (cache_load(x)) {
+            x->status = VV_OK;
+            x->done = 1;
+        } else { /* the entry went: ask again without it */
+            x->cached = 0;
+            start(s, m, x);
+        }
+        return;
+    }
     if (rc == CURLE_OK &&
         (code == 301 || code == 302 || code == 303 || code == 307 || code == 308)) {
         char *to = NULL;
@@ -652,6 +853,8 @@ finish(bs_http *s, CURLM *m, xfer *x, CURLcode rc) {
                 return;
             }
         } else {
+            if (!g->missing)
+                cache_store(x, x->r.etag);
             x->status = VV_OK;
             x->done = 1;
             return;
@@ -723,6 +926,8 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
                      (unsigned long long)g[i].len, (unsigned long long)g[i].max);
             fail(s, &x[i], VV_ERR_LIMIT, what);
             left--;
+        } else {
+            cache_lookup(&x[i]);
         }
     }
     int active = 0;
