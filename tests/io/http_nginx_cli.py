@@ -9,7 +9,8 @@ writes a sharded + zstd NGFF 0.5 pyramid (3 levels) and its Zarr v2 twin; nginx
 loopback port; not the system's service) serves OUTDIR over HTTP and over HTTPS
 with a test CA made here with openssl. Checked:
 
-- `volvis info URL` is `volvis info DIR` but for the name, v3 and v2, HTTP and HTTPS;
+- `volvis info URL` is `volvis info DIR` but for the name, v3 and v2, HTTP and HTTPS
+  (HTTP/2 there, as nginx's log says);
 - `volvis render URL` (MIP, composite; whole and out of core; on 2 MPI ranks when
   mpirun is there) and `volvis slice URL` are the local PNGs byte for byte; `volvis convert URL --level 2 out.nrrd` the local one's voxels;
 - nginx's access log: the shards are read by range (206 with a Range header), and
@@ -60,7 +61,7 @@ pid {OUT}/nginx.pid;
 error_log {OUT}/error.log;
 events {{ worker_connections 256; }}
 http {{
-  log_format ranges '$status $request_method "$uri" "$http_range" $body_bytes_sent';
+  log_format ranges '$status $request_method "$uri" "$http_range" $body_bytes_sent $server_protocol';
   access_log {log} ranges;
   client_body_temp_path {OUT}/tmp_body;
   proxy_temp_path {OUT}/tmp_proxy;
@@ -134,6 +135,9 @@ try:
     check(p1.returncode == 0 and p2.returncode == 0 and
           open(a, "rb").read() == open(b, "rb").read(),
           f"render over HTTPS with the test CA is the local PNG ({p2.stderr.strip()})")
+    protos = {ln.split()[-1] for ln in log_lines()}
+    check("HTTP/2.0" in protos and "HTTP/1.1" in protos,
+          f"HTTP/2 over TLS, HTTP/1.1 in the clear ({sorted(protos)})")
     # slice, and MPI ranks (each opens the URL through the same door)
     a, b = (os.path.join(OUT, f"slice_{w}.png") for w in ("local", "url"))
     p1 = volvis("slice", v3, "-o", a)
