@@ -13,6 +13,8 @@
  *   signed one carries Authorization AWS4-HMAC-SHA256 with the key id,
  *   x-amz-date, x-amz-content-sha256 and the session token, never the
  *   secret; an anonymous one no Authorization.
+ * - A batch of six reads on one multi handle (one absent): each its own
+ *   bytes, the absent one missing.
  * - Responses: 206 with the range asked, a wrong Content-Range, 200 with the
  *   whole object to a range (sliced), a suffix, a truncated body, a
  *   Content-Length over the budget, Content-Encoding refused, 404 missing,
@@ -263,6 +265,90 @@ test_sigv4_on_the_wire(void **state) {
     clear_aws();
 }
 
+/* ---- a batch: many ranges in flight on one multi handle ------------------ */
+
+typedef struct echo_srv {
+    int fd, port, n;
+} echo_srv;
+
+/* Answers @p n requests, one a connection: the body is the path asked. */
+static void *
+serve_echo(void *u) {
+    echo_srv *o = u;
+    for (int k = 0; k < o->n; k++) {
+        const int c = accept(o->fd, NULL, NULL);
+        if (c < 0)
+            return NULL;
+        char req[4096];
+        size_t n = 0;
+        while (n + 1 < sizeof req) {
+            const ssize_t r = read(c, req + n, sizeof req - 1 - n);
+            if (r <= 0)
+                break;
+            n += (size_t)r;
+            req[n] = '\0';
+            if (strstr(req, "\r\n\r\n"))
+                break;
+        }
+        req[n] = '\0';
+        char path[256] = "";
+        sscanf(req, "GET %255s", path);
+        const int missing = strstr(path, "absent") != NULL;
+        char resp[600];
+        snprintf(resp, sizeof resp,
+                 missing
+                     ? "HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n"
+                     : "HTTP/1.1 200 OK\r\nContent-Length: %zu\r\nConnection: close\r\n\r\n%s",
+                 strlen(path), path);
+        ssize_t w = write(c, resp, strlen(resp));
+        (void)w;
+        close(c);
+    }
+    return NULL;
+}
+
+static void
+test_batch(void **state) {
+    (void)state;
+    clear_aws();
+    echo_srv o = {.n = 6};
+    o.fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {0};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    assert_int_equal(bind(o.fd, (struct sockaddr *)&a, sizeof a), 0);
+    socklen_t len = sizeof a;
+    assert_int_equal(getsockname(o.fd, (struct sockaddr *)&a, &len), 0);
+    o.port = ntohs(a.sin_port);
+    assert_int_equal(listen(o.fd, 16), 0);
+    pthread_t th;
+    assert_int_equal(pthread_create(&th, NULL, serve_echo, &o), 0);
+    char root[64];
+    snprintf(root, sizeof root, "http://127.0.0.1:%d/st", o.port);
+    vv_bytesrc *src = bs_remote(root);
+    assert_non_null(src);
+    bs_get g[6];
+    const char *keys[6] = {"a/0", "b/1", "absent", "c/2/3", "d", "e/zarr.json"};
+    for (int i = 0; i < 6; i++)
+        g[i] = (bs_get){.key = keys[i], .off = 0, .len = BS_ALL, .max = 100};
+    assert_int_equal(src->ops->get_many(src, g, 6), VV_OK);
+    for (int i = 0; i < 6; i++) {
+        char want[64];
+        snprintf(want, sizeof want, "/st/%s", keys[i]);
+        if (i == 2) {
+            assert_true(g[i].missing);
+            assert_null(g[i].out);
+            continue;
+        }
+        assert_false(g[i].missing);
+        assert_int_equal(g[i].n, strlen(want));
+        assert_memory_equal(g[i].out, want, g[i].n);
+        free(g[i].out);
+    }
+    pthread_join(th, NULL);
+    close(o.fd);
+}
+
 /* ---- responses ------------------------------------------------------------ */
 
 /* Feeds @p head (lines separated by \n) and @p body to @p r. */
@@ -375,9 +461,8 @@ test_responses(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_s3_addressing),
-        cmocka_unit_test(test_credentials),
-        cmocka_unit_test(test_sigv4_on_the_wire),
+        cmocka_unit_test(test_s3_addressing),     cmocka_unit_test(test_credentials),
+        cmocka_unit_test(test_sigv4_on_the_wire), cmocka_unit_test(test_batch),
         cmocka_unit_test(test_responses),
     };
     return vt_run_tests(tests, NULL, NULL);
