@@ -686,6 +686,11 @@ start(bs_http *s, CURLM *m, xfer *x) {
     if (ranged)
         curl_easy_setopt(e, CURLOPT_RANGE, range);
     http_resp_init(&x->r, g->off, g->len, g->max, ranged, head);
+    /* a server that ignores ranges: its whole objects, all requests in
+     * flight together, within a quarter of the memory budget */
+    const uint64_t share = vv_memory_budget_get() / 4 / (uint64_t)cfg.in_flight;
+    const uint64_t floor_ = (uint64_t)1 << 20;
+    x->r.whole_max = share < floor_ ? floor_ : share > HTTP_WHOLE_MAX ? HTTP_WHOLE_MAX : share;
     curl_slist_free_all(x->hdrs);
     x->hdrs = NULL;
     if (x->cached) { /* the cache's copy, if the server says it is still the object */

@@ -25,6 +25,7 @@ http_resp_init(http_resp *r, uint64_t off, uint64_t len, uint64_t max, int range
     r->max = max;
     r->ranged = ranged;
     r->head = head;
+    r->whole_max = HTTP_WHOLE_MAX;
 }
 
 void
@@ -36,8 +37,10 @@ http_resp_free(http_resp *r) {
 
 void
 http_resp_reset(http_resp *r) {
+    const uint64_t wm = r->whole_max;
     http_resp_free(r);
     http_resp_init(r, r->off, r->len, r->max, r->ranged, r->head);
+    r->whole_max = wm;
 }
 
 /* Stops the transfer: 0 with r->why. */
@@ -138,13 +141,13 @@ headers_done(http_resp *r) {
                         (unsigned long long)count, (unsigned long long)r->max);
         r->cap = (size_t)count;
     } else if (r->ranged) {
-        /* the whole object for a range: taken up to HTTP_WHOLE_MAX, sliced */
-        r->cap = (size_t)HTTP_WHOLE_MAX;
-        if (r->has_clen && r->clen > HTTP_WHOLE_MAX)
+        /* the whole object for a range: taken up to whole_max, sliced */
+        r->cap = (size_t)r->whole_max;
+        if (r->has_clen && r->clen > r->whole_max)
             return stop(r, VV_ERR_LIMIT,
                         "the server ignored the byte range: the whole object of %llu bytes "
                         "(at most %llu taken)",
-                        (unsigned long long)r->clen, (unsigned long long)HTTP_WHOLE_MAX);
+                        (unsigned long long)r->clen, (unsigned long long)r->whole_max);
     } else {
         r->cap = r->max > SIZE_MAX ? SIZE_MAX : (size_t)r->max;
         if (r->has_clen && r->clen > r->max)
@@ -166,7 +169,9 @@ http_resp_header(http_resp *r, const char *line, size_t n) {
     if (n > 5 && !strncmp(line, "HTTP/", 5)) {
         /* a new response (an interim 100, a redirect's): what the last said is forgotten */
         http_resp_free(r);
+        const uint64_t wm = r->whole_max;
         http_resp_init(r, r->off, r->len, r->max, r->ranged, r->head);
+        r->whole_max = wm;
         const char *sp = memchr(line, ' ', n);
         const size_t rest = sp ? n - (size_t)(sp + 1 - line) : 0;
         if (!sp || rest < 3 || !isdigit((unsigned char)sp[1]) || !isdigit((unsigned char)sp[2]) ||

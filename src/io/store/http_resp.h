@@ -30,6 +30,10 @@ typedef struct http_resp {
      * HEAD request (no body); max: the most bytes the caller takes */
     uint64_t off, len, max;
     int ranged, head;
+    /* the most of a whole object taken for a range (HTTP_WHOLE_MAX unless
+     * the caller lowers it: the transport shares a quarter of the memory
+     * budget among its requests in flight) */
+    uint64_t whole_max;
     /* heard (the last response's headers) */
     int status; /* 0 until a status line */
     int has_clen, has_crange, crange_bad;
