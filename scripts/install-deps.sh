@@ -31,7 +31,8 @@ pkgs=(build-essential cmake pkg-config libwebsockets-dev libturbojpeg0-dev libte
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
       libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libseccomp-dev libhdf5-dev libopenmpi-dev openmpi-bin
-      python3-dev python3-cffi python3-numpy libvulkan-dev glslc)
+      python3-dev python3-cffi python3-numpy libvulkan-dev glslc
+      libcurl4-openssl-dev nginx-light openssl)
 for what in "$@"; do
   case "$what" in
     build) ;;

@@ -111,6 +111,7 @@ vvg_application_startup(GApplication *app) {
     } keys[] = {
         {"app.quit", {"<Control>q", NULL}},
         {"win.open", {"<Control>o", NULL}},
+        {"win.open-url", {"<Control><Shift>o", NULL}},
         {"win.import-raw", {"<Control>i", NULL}},
         {"win.browse-dicom", {"<Control>d", NULL}},
         {"win.close", {"<Control>w", NULL}},

@@ -432,6 +432,63 @@ act_open_file(GSimpleAction *a, GVariant *p, gpointer user) {
     vvg_window_open(user, g_variant_get_string(p, NULL));
 }
 
+/* "Open URL…": a remote OME-Zarr store (http, https, s3), opened through
+ * the same door as a file (docs/formats.md, "Remote data"). */
+static void
+open_url_go(GtkWidget *w, gpointer dialog) {
+    (void)w;
+    GtkWidget *entry = g_object_get_data(G_OBJECT(dialog), "entry");
+    VvgWindow *win = g_object_get_data(G_OBJECT(dialog), "win");
+    g_autofree char *url = g_strstrip(g_strdup(gtk_editable_get_text(GTK_EDITABLE(entry))));
+    gtk_window_destroy(GTK_WINDOW(dialog));
+    if (url[0])
+        vvg_window_open(win, url);
+}
+
+static void
+act_open_url(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    GtkWidget *d = gtk_window_new();
+    gtk_window_set_title(GTK_WINDOW(d), "VolVis — open URL");
+    gtk_window_set_transient_for(GTK_WINDOW(d), GTK_WINDOW(user));
+    gtk_window_set_modal(GTK_WINDOW(d), TRUE);
+    gtk_window_set_default_size(GTK_WINDOW(d), 520, -1);
+    GtkWidget *box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 8);
+    gtk_widget_set_margin_start(box, 12);
+    gtk_widget_set_margin_end(box, 12);
+    gtk_widget_set_margin_top(box, 12);
+    gtk_widget_set_margin_bottom(box, 12);
+    GtkWidget *label = gtk_label_new("An OME-Zarr store over HTTP(S) or S3:");
+    gtk_label_set_xalign(GTK_LABEL(label), 0);
+    GtkWidget *entry = gtk_entry_new();
+    gtk_entry_set_placeholder_text(
+        GTK_ENTRY(entry), "https://host/path/image.ome.zarr or s3://bucket/image.ome.zarr");
+    GtkWidget *row = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 8);
+    gtk_widget_set_halign(row, GTK_ALIGN_END);
+    GtkWidget *cancel = gtk_button_new_with_label("Cancel");
+    GtkWidget *open = gtk_button_new_with_label("Open");
+    gtk_box_append(GTK_BOX(row), cancel);
+    gtk_box_append(GTK_BOX(row), open);
+    gtk_box_append(GTK_BOX(box), label);
+    gtk_box_append(GTK_BOX(box), entry);
+    gtk_box_append(GTK_BOX(box), row);
+    gtk_window_set_child(GTK_WINDOW(d), box);
+    g_object_set_data(G_OBJECT(d), "entry", entry);
+    g_object_set_data(G_OBJECT(d), "win", user);
+    g_signal_connect(open, "clicked", G_CALLBACK(open_url_go), d);
+    g_signal_connect(entry, "activate", G_CALLBACK(open_url_go), d);
+    g_signal_connect_swapped(cancel, "clicked", G_CALLBACK(gtk_window_destroy), d);
+    GtkEventController *esc = gtk_shortcut_controller_new();
+    gtk_shortcut_controller_add_shortcut(GTK_SHORTCUT_CONTROLLER(esc),
+                                         gtk_shortcut_new(gtk_keyval_trigger_new(GDK_KEY_Escape, 0),
+                                                          gtk_named_action_new("window.close")));
+    gtk_widget_add_controller(d, esc);
+    gtk_accessible_update_property(GTK_ACCESSIBLE(entry), GTK_ACCESSIBLE_PROPERTY_LABEL,
+                                   "URL of the store", -1);
+    gtk_window_present(GTK_WINDOW(d));
+}
+
 static void
 act_import_raw(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
@@ -885,6 +942,7 @@ main_menu(void) {
         const char *section, *label, *action;
     } items[] = {
         {"File", "Open…", "win.open"},
+        {"File", "Open URL…", "win.open-url"},
         {"File", "Import raw…", "win.import-raw"},
         {"File", "Browse DICOM…", "win.browse-dicom"},
         {"File", "Save session", "win.save"},
@@ -1148,6 +1206,7 @@ vvg_window_class_init(VvgWindowClass *klass) {
 
 static const GActionEntry win_actions[] = {
     {"open", act_open, NULL, NULL, NULL, {0}},
+    {"open-url", act_open_url, NULL, NULL, NULL, {0}},
     {"open-file", act_open_file, "s", NULL, NULL, {0}},
     {"import-raw", act_import_raw, NULL, NULL, NULL, {0}},
     {"browse-dicom", act_browse_dicom, NULL, NULL, NULL, {0}},

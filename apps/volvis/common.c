@@ -125,6 +125,9 @@ cli_check_readable(const char *path) {
 
 int
 cli_check_readable_input(const char *path) {
+    /* a remote store (http://, https://, s3://): the library fetches it */
+    if (vv_path_is_url(path))
+        return 0;
     struct stat st;
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
         if (access(path, R_OK | X_OK) != 0) {

@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
@@ -80,12 +81,26 @@ usage(FILE *out) {
                  "our own formats (SLC, MetaImage, VTK, OpenDX, PLOT3D, raw, .vvb) there too\n"
                  "(docs/security.md).\n"
                  "\n"
+                 "An OME-Zarr store may be a URL wherever a file is taken: http://,\n"
+                 "https:// or s3://BUCKET/KEY (fetched by byte range in this process,\n"
+                 "TLS verified). The environment sets the transport: VOLVIS_HTTP_MAX_IN_FLIGHT\n"
+                 "(32), VOLVIS_HTTP_RETRIES (3), VOLVIS_HTTP_CONNECT_TIMEOUT (10 s),\n"
+                 "VOLVIS_HTTP_LOW_SPEED_TIME (10 s) and _LIMIT (256 B/s), CURL_CA_BUNDLE,\n"
+                 "proxies as curl reads them; S3: AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY,\n"
+                 "AWS_SESSION_TOKEN, AWS_PROFILE, AWS_REGION, AWS_ENDPOINT_URL,\n"
+                 "AWS_NO_SIGN_REQUEST=YES (docs/cli.md, \"Remote stores\").\n"
+                 "  --cache-dir DIR    keep the bytes fetched from remote stores in DIR\n"
+                 "                     (any command; checked by ETag before use, at most\n"
+                 "                     $VOLVIS_HTTP_CACHE_MAX bytes, default 1G; the oldest\n"
+                 "                     go first; $VOLVIS_HTTP_CACHE_DIR alike)\n"
+                 "\n"
                  "Exit status: 0 success, 1 bad input (file, format or render error),\n"
                  "2 bad usage, 130 interrupted. Errors are one line on stderr.\n");
 }
 
 /* Takes "--max-memory SIZE" / "--max-memory=SIZE" out of argv and sets the
- * library's memory budget. Returns 0, or the exit status of a usage error. */
+ * library's memory budget, and "--cache-dir DIR" (the environment's
+ * VOLVIS_HTTP_CACHE_DIR). Returns 0, or the exit status of a usage error. */
 static int
 take_max_memory(int *argc, char **argv) {
     int out = 1;
@@ -95,6 +110,19 @@ take_max_memory(int *argc, char **argv) {
             while (i < *argc)
                 argv[out++] = argv[i++];
             break;
+        }
+        /* --cache-dir DIR: the remote stores' bytes kept on disk (the transport
+         * reads VOLVIS_HTTP_CACHE_DIR at its first use) */
+        if (!strcmp(argv[i], "--cache-dir") || !strncmp(argv[i], "--cache-dir=", 12)) {
+            const char *dir = argv[i][11] == '=' ? argv[i] + 12 : NULL;
+            if (!dir && i + 1 >= *argc)
+                return cli_usage_error(NULL, "--cache-dir needs a folder");
+            if (!dir)
+                dir = argv[++i];
+            if (!*dir)
+                return cli_usage_error(NULL, "--cache-dir needs a folder");
+            setenv("VOLVIS_HTTP_CACHE_DIR", dir, 1);
+            continue;
         }
         if (!strcmp(argv[i], "--max-memory")) {
             if (i + 1 >= *argc)

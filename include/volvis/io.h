@@ -80,9 +80,19 @@ vv_status vv_format_parse(const char *name, vv_format *out);
  * its preamble that GDCM can read, the header beside an Analyze .img). A
  * folder is VV_FORMAT_DICOM when it holds a DICOMDIR or a DICOM file, else
  * VV_FORMAT_TIFF when it holds a TIFF file. Returns VV_FORMAT_UNKNOWN when
- * nothing matches (and for raw files, which have no signature).
+ * nothing matches (and for raw files, which have no signature). A URL
+ * (vv_path_is_url) is VV_FORMAT_OME_ZARR without a look at the network.
  */
 vv_format vv_format_detect(const char *path);
+
+/**
+ * 1 when @p path names a remote store rather than a file: it starts with
+ * http://, https:// or s3:// (case-insensitive; docs/formats.md, "Remote
+ * data"). Such a path is an OME-Zarr store read over the network by the
+ * library's byte sources; nothing local is looked at. 0 for NULL. Pure,
+ * thread-safe.
+ */
+int vv_path_is_url(const char *path);
 
 /** How to read a raw file: nothing in the file describes it. */
 typedef struct vv_raw_params {

@@ -22,6 +22,7 @@
 
 #include "core/internal.h"
 #include "io/io_internal.h"
+#include "io/store/bytesrc.h"
 #include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
@@ -301,6 +302,17 @@ vv_format
 vv_format_detect_kind(const char *path, int kind, int deep) {
     if (!path)
         return VV_FORMAT_UNKNOWN;
+    /* a URL is a remote store (src/io/store/bytesrc.h): the Zarr row,
+     * which tells v2 from v3 by the objects it fetches; nothing local is
+     * looked at */
+    if (bs_is_url(path)) {
+        if (kind >= 0 && kind != VV_DATA_VOLUME)
+            return VV_FORMAT_UNKNOWN;
+        for (int i = 0; i < N_BUILT_IN; i++)
+            if (!strcmp(table[i]->name, "zarr"))
+                return (vv_format)(i + 1);
+        return VV_FORMAT_UNKNOWN;
+    }
     unsigned char buf[VV_FORMAT_PROBE_BYTES + 1];
     char text[VV_FORMAT_PROBE_BYTES + 1];
     vv_format_probe p;

@@ -16,6 +16,7 @@
 #include "core/internal.h"
 #include "io/io_internal.h"
 #include "io/store/bricked.h"
+#include "io/store/bytesrc.h"
 #include "io/store/pyramid.h"
 #include "io/transport.h"
 
@@ -195,7 +196,7 @@ vv_open(vv_opened *out, const char *path, const vv_open_options *opt) {
         opt = &def;
     }
     struct stat st;
-    if (stat(path, &st) != 0) {
+    if (!bs_is_url(path) && stat(path, &st) != 0) { /* a URL: its reader fetches */
         const int e = errno;
         return vv_error_set(VV_ERR_IO, "cannot open %s: %s", path, strerror(e));
     }

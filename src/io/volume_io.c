@@ -11,6 +11,7 @@
 
 #include "core/internal.h"
 #include "io/io_internal.h"
+#include "io/store/bytesrc.h"
 #include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
@@ -51,6 +52,10 @@ format_of(vv_format f) {
 /* Checks @p path can be opened (a folder only by a format that reads folders). */
 static vv_status
 check_input(const char *path, vv_format f, int *is_dir) {
+    if (bs_is_url(path)) { /* a remote store: a folder of objects, looked at by its reader */
+        *is_dir = 1;
+        return VV_OK;
+    }
     struct stat st;
     if (stat(path, &st) != 0) {
         int e = errno;

@@ -60,6 +60,8 @@ misfit(vv_world_open_info *info, const char *what, const char *reason) {
 /* A readable file, or a readable and searchable folder. */
 static vv_status
 check_readable(const char *path, int folder_ok) {
+    if (vv_path_is_url(path)) /* a remote store: its reader fetches */
+        return VV_OK;
     struct stat st;
     if (stat(path, &st) != 0)
         return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
@@ -79,6 +81,8 @@ check_readable(const char *path, int folder_ok) {
 static int
 is_scene_file(const char *path) {
     size_t n = strlen(path);
+    if (vv_path_is_url(path))
+        return 0;
     if (n >= 5 && strcasecmp(path + n - 5, ".json") == 0)
         return 1;
     struct stat st;

@@ -191,7 +191,9 @@ typedef struct vv_store {
     double range[2];
     size_t scratch; /**< bytes of scratch each read_chunk call needs (0: none) */
     int parallel;   /**< 1: read_chunk may run on several threads at once (else the pyramid
-                         serializes it, its loader's reads included) */
+                         serializes it, its loader's reads included); N > 1: as 1, and its
+                         reads wait on the network: up to N threads read at once, however
+                         few the cores */
     /**
      * Chunk @p c (chunk indices along x, y, z) of @p level: its voxels
      * inside the level, box org .. org + dims - 1, written to @p dst (x

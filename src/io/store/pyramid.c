@@ -29,6 +29,7 @@
 #include <math.h>
 #include <omp.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -38,6 +39,7 @@
 
 #include "core/cache.h"
 #include "core/internal.h"
+#include "io/store/bytesrc.h"
 #include "io/store/pyramid.h"
 #include "io/store/pyramid_internal.h"
 #include "volvis/bricks.h"
@@ -117,47 +119,107 @@ py_read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratc
     return s;
 }
 
+/* A batch of chunks being read: the next to take, the first failure in order. */
+typedef struct dc_job {
+    vv_pyramid *p;
+    py_chunk **todo;
+    int n;
+    uint64_t *file_bytes;
+    int *missing;
+    atomic_int next;
+    pthread_mutex_t lock;
+    long long first;
+    vv_status first_status;
+    char first_msg[1024];
+} dc_job;
+
+/* Chunk @p i of @p j read with scratch @p buf; a failure kept when it is
+ * the first in order. */
+static void
+dc_one(dc_job *j, int i, unsigned char *buf) {
+    const vv_store *st = &j->p->store;
+    py_chunk *c = j->todo[i];
+    const py_level *cl = &j->p->lv[c->level];
+    int cc[3];
+    for (int k = 0; k < 3; k++)
+        cc[k] = c->org[k] / cl->cdims[k];
+    vv_status cs =
+        buf || !st->scratch
+            ? py_read_chunk(j->p, c, cc, buf, &j->missing[i], &j->file_bytes[i])
+            : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes", st->scratch);
+    if (cs != VV_OK) {
+        pthread_mutex_lock(&j->lock);
+        if (j->first < 0 || i < j->first) {
+            j->first = i;
+            j->first_status = cs;
+            snprintf(j->first_msg, sizeof j->first_msg, "%s", vv_error_message());
+        }
+        pthread_mutex_unlock(&j->lock);
+    }
+}
+
+/* A thread of a store whose reads wait on the network: chunks of @p u
+ * taken one at a time until none is left. */
+static void *
+dc_worker(void *u) {
+    dc_job *j = u;
+    const vv_store *st = &j->p->store;
+    unsigned char *buf = st->scratch ? malloc(st->scratch) : NULL;
+    for (int i; (i = atomic_fetch_add(&j->next, 1)) < j->n;)
+        dc_one(j, i, buf);
+    free(buf);
+    return NULL;
+}
+
 /* Fetches the chunks in @p todo (n >= 1 of them, their blocks allocated)
  * from the store, on every core when it allows, file bytes and missing
  * flags per chunk into @p file_bytes and @p missing; the first failing
- * chunk's error in order. */
+ * chunk's error in order. A store whose reads wait on the network
+ * (parallel > 1) is read by that many threads of our own: OpenMP would
+ * give one thread inside a renderer's parallel region. */
 static vv_status
 decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
     const vv_store *st = &p->store;
-    long long first = -1;
-    vv_status first_status = VV_OK;
-    char first_msg[1024] = "";
-    const int nthreads = !st->parallel || st->scratch > ((size_t)64 << 20) || n < 2 ? 1
-                         : omp_get_max_threads() < n ? omp_get_max_threads()
-                                                     : n;
+    dc_job j = {.p = p,
+                .todo = todo,
+                .n = n,
+                .file_bytes = file_bytes,
+                .missing = missing,
+                .first = -1,
+                .first_status = VV_OK};
+    atomic_init(&j.next, 0);
+    pthread_mutex_init(&j.lock, NULL);
+    const int big = st->scratch > ((size_t)64 << 20);
+    if (st->parallel > 1 && !big && n > 1) {
+        int want = st->parallel < n ? st->parallel : n;
+        /* each thread holds a chunk's scratch: at most a quarter of the budget */
+        const uint64_t quarter = vv_memory_budget_get() / 4;
+        if (st->scratch && (uint64_t)want * st->scratch > quarter)
+            want = quarter / st->scratch > 1 ? (int)(quarter / st->scratch) : 1;
+        pthread_t th[64];
+        int started = 0;
+        for (int t = 1; t < want && t < 64; t++)
+            if (pthread_create(&th[started], NULL, dc_worker, &j) == 0)
+                started++;
+        dc_worker(&j);
+        for (int t = 0; t < started; t++)
+            pthread_join(th[t], NULL);
+    } else {
+        const int nthreads = !st->parallel || big || n < 2 ? 1
+                             : omp_get_max_threads() < n   ? omp_get_max_threads()
+                                                           : n;
 #pragma omp parallel num_threads(nthreads)
-    {
-        unsigned char *buf = st->scratch ? malloc(st->scratch) : NULL;
+        {
+            unsigned char *buf = st->scratch ? malloc(st->scratch) : NULL;
 #pragma omp for schedule(dynamic, 1)
-        for (int i = 0; i < n; i++) {
-            py_chunk *c = todo[i];
-            const py_level *cl = &p->lv[c->level];
-            int cc[3];
-            for (int k = 0; k < 3; k++)
-                cc[k] = c->org[k] / cl->cdims[k];
-            vv_status cs =
-                buf || !st->scratch
-                    ? py_read_chunk(p, c, cc, buf, &missing[i], &file_bytes[i])
-                    : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
-                                   st->scratch);
-            if (cs != VV_OK) {
-#pragma omp critical(vv_pyramid_err)
-                if (first < 0 || i < first) {
-                    first = i;
-                    first_status = cs;
-                    snprintf(first_msg, sizeof first_msg, "%s", vv_error_message());
-                }
-            }
+            for (int i = 0; i < n; i++)
+                dc_one(&j, i, buf);
+            free(buf);
         }
-        free(buf);
     }
-    if (first >= 0)
-        return vv_error_set(first_status, "%s", first_msg);
+    pthread_mutex_destroy(&j.lock);
+    if (j.first >= 0)
+        return vv_error_set(j.first_status, "%s", j.first_msg);
     return VV_OK;
 }
 
@@ -512,8 +574,8 @@ vv_store_read_level(vv_store *st, int level, vv_volume **out) {
 vv_status
 vv_pyramid_prefix(vv_status s, const char *name, const char *path) {
     char head[512];
-    const int n = snprintf(head, sizeof head, "%s: %s:", name, vv_path_basename(path));
+    const int n = snprintf(head, sizeof head, "%s: %s:", name, bs_name(path));
     if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
         return s;
-    return vv_error_prefix(s, "%s: %s", name, vv_path_basename(path));
+    return vv_error_prefix(s, "%s: %s", name, bs_name(path));
 }

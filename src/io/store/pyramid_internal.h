@@ -21,7 +21,7 @@
 #include "io/store/pyramid.h"
 
 #define PY_BUCKETS 4096u
-#define PY_LOADERS_MAX 4
+#define PY_LOADERS_MAX 64
 
 /* A cache entry's state: its voxels decoded, or being decoded by the
  * frame's thread or a loader (its bytes reserved, pinned), or a loader's

@@ -180,12 +180,20 @@ loader_main(void *arg) {
     return NULL;
 }
 
-/* The loader's threads, started at the first request (lock held): a few,
- * one when the store reads one chunk at a time. */
+/* The loader's threads, started at the first request (lock held): a few
+ * (the cores, at most 4), one when the store reads one chunk at a time, as
+ * many as the store says when its reads wait on the network (a remote
+ * store's requests in flight). */
 static vv_status
 start_loaders(vv_pyramid *p) {
-    int n = p->store.parallel ? vv_threads_get() : 1;
+    int n = p->store.parallel > 1 ? p->store.parallel : p->store.parallel ? vv_threads_get() : 1;
     n = n < 1 ? 1 : n > PY_LOADERS_MAX ? PY_LOADERS_MAX : n;
+    if (p->store.parallel <= 1 && n > 4)
+        n = 4;
+    /* each loader holds a chunk's scratch: at most a quarter of the budget */
+    const uint64_t quarter = vv_memory_budget_get() / 4;
+    if (p->store.scratch && (uint64_t)n * p->store.scratch > quarter)
+        n = quarter / p->store.scratch > 1 ? (int)(quarter / p->store.scratch) : 1;
     if (p->store.scratch > ((size_t)64 << 20))
         n = 1;
     for (int i = 0; i < n; i++) {

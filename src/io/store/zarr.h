@@ -154,10 +154,17 @@ void vv_zr_array_release(zr_array *a);
  * len = ZR_ALL: to the end. *size (may be NULL) = the object's size. At
  * most @p max bytes are read (VV_ERR_LIMIT beyond). An absent object: VV_OK,
  * *missing = 1 (when @p missing is NULL: VV_ERR_FORMAT "no KEY"). A range
- * past the end: VV_ERR_FORMAT. The object must resolve beneath a->real.
- * Local files today (pread); HTTP range requests will take its place. */
+ * past the end: VV_ERR_FORMAT. A local object must resolve beneath a->real;
+ * a root that is a URL (http://, https://, s3://) is read over the network
+ * (bytesrc.h: the byte source layer; the format never knows which). */
 vv_status zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uint64_t max,
                        unsigned char **out, size_t *n, uint64_t *size, int *missing);
+
+struct bs_get;
+/* zr_store_get of @p n ranges at once (bytesrc.h's bs_get; all in flight
+ * together over the network): VV_OK when each is read or missing, else
+ * the first failure's status and error. */
+vv_status zr_store_get_many(const zr_array *a, struct bs_get *g, int n);
 
 /* The object @p key of the store (beneath a->root, not leading out of
  * a->real) parsed as JSON (a json_t *, a new reference; at most

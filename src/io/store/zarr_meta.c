@@ -19,6 +19,7 @@
 #include <jansson.h>
 
 #include "core/internal.h"
+#include "io/store/bytesrc.h"
 #include "io/store/zarr.h"
 
 /* The store rooted at @p root: what zr_store_get needs (its real path). */
@@ -365,7 +366,7 @@ vv_ome_zarr_contents_get(const char *path, vv_ome_zarr_contents *out) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "zarr: NULL argument");
     const vv_status s = contents_get(path, out);
-    return s == VV_OK ? s : vv_error_prefix(s, "zarr: %s", vv_path_basename(path));
+    return s == VV_OK ? s : vv_error_prefix(s, "zarr: %s", bs_name(path));
 }
 
 void

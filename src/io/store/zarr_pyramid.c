@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "io/store/bytesrc.h"
 #include "io/store/pyramid.h"
 #include "io/store/zarr.h"
 
@@ -90,7 +91,9 @@ vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time, vv_lo
     st->ctx = z;
     st->close = zp_close;
     st->read_chunk = zp_read_chunk;
-    st->parallel = 1;
+    /* a remote store's reads wait on the network: as many at once as the
+     * transport keeps in flight */
+    st->parallel = bs_is_url(path) ? bs_http_in_flight() : 1;
     for (int i = 0; i < n_levels; i++) {
         if ((s = zp_open_level(z, path, i, channel, time, info)) != VV_OK)
             return s;

@@ -49,6 +49,7 @@
 #include <zstd.h>
 
 #include "core/internal.h"
+#include "io/store/bytesrc.h"
 #include "io/store/zarr.h"
 
 /* 1 when the real path @p real lies in or beneath the real folder @p dir. */
@@ -62,92 +63,28 @@ zr_beneath(const char *real, const char *dir) {
 vv_status
 zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uint64_t max,
              unsigned char **out, size_t *n, uint64_t *size, int *missing) {
-    *out = NULL;
-    *n = 0;
-    if (missing)
-        *missing = 0;
-    char p[8400];
-    if (snprintf(p, sizeof p, "%s/%s", a->root, key) >= (int)sizeof p)
-        return vv_error_set(VV_ERR_LIMIT, "%s: key too long", key);
-    /* not blocking: a FIFO would block the open forever */
-    const int fd = open(p, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) {
-        if (errno == ENOENT) {
-            if (missing) {
-                *missing = 1;
-                return VV_OK;
-            }
-            return vv_error_set(VV_ERR_FORMAT, "no %s", key);
-        }
-        return vv_error_set(VV_ERR_IO, "%s: %s", key, strerror(errno));
-    }
-    struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        close(fd);
-        return vv_error_set(VV_ERR_FORMAT, "%s is not a regular file", key);
-    }
-    /* a file (or a folder on its way) that is a link out of the store */
-    if (a->real[0]) {
-        char *rp = realpath(p, NULL);
-        const int inside = rp && zr_beneath(rp, a->real);
-        free(rp);
-        if (!inside) {
-            close(fd);
-            return vv_error_set(VV_ERR_FORMAT, "%s leaves the store (a link to a file outside it)",
-                                key);
-        }
-    }
-    const uint64_t fsz = st.st_size < 0 ? 0 : (uint64_t)st.st_size;
+    bs_get g = {.key = key, .off = off, .len = len, .max = max};
+    const vv_status s = zr_store_get_many(a, &g, 1);
+    *out = g.out;
+    *n = g.n;
     if (size)
-        *size = fsz;
-    if (off == ZR_SUFFIX) {
-        if (len > fsz) {
-            close(fd);
-            return vv_error_set(VV_ERR_FORMAT,
-                                "%s: %llu bytes, fewer than the %llu asked at its end", key,
-                                (unsigned long long)fsz, (unsigned long long)len);
-        }
-        off = fsz - len;
+        *size = g.size;
+    if (missing)
+        *missing = g.missing;
+    if (s == VV_OK && g.missing && !missing)
+        return vv_error_set(VV_ERR_FORMAT, "no %s", key);
+    return s;
+}
+
+vv_status
+zr_store_get_many(const zr_array *a, bs_get *g, int n) {
+    if (bs_is_url(a->root)) {
+        vv_bytesrc *src = bs_remote(a->root);
+        return src ? src->ops->get_many(src, g, n) : VV_ERR_INVALID;
     }
-    if (len == ZR_ALL)
-        len = off <= fsz ? fsz - off : 0;
-    if (off > fsz || len > fsz - off) {
-        close(fd);
-        return vv_error_set(VV_ERR_FORMAT, "%s: bytes %llu..%llu past its end (%llu bytes)", key,
-                            (unsigned long long)off, (unsigned long long)(off + len),
-                            (unsigned long long)fsz);
-    }
-    if (len > max) {
-        close(fd);
-        return len == fsz ? vv_error_set(VV_ERR_LIMIT, "%s is %llu bytes (limit %llu)", key,
-                                         (unsigned long long)len, (unsigned long long)max)
-                          : vv_error_set(VV_ERR_LIMIT, "%s: %llu bytes to read (limit %llu)", key,
-                                         (unsigned long long)len, (unsigned long long)max);
-    }
-    unsigned char *buf = malloc(len ? (size_t)len : 1);
-    if (!buf) {
-        close(fd);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for %llu bytes of %s",
-                            (unsigned long long)len, key);
-    }
-    uint64_t got = 0;
-    while (got < len) {
-        const ssize_t r = pread(fd, buf + got, (size_t)(len - got), (off_t)(off + got));
-        if (r < 0 && errno == EINTR)
-            continue;
-        if (r <= 0)
-            break;
-        got += (uint64_t)r;
-    }
-    close(fd);
-    if (got != len) {
-        free(buf);
-        return vv_error_set(VV_ERR_IO, "%s: cannot read bytes %llu..%llu", key,
-                            (unsigned long long)off, (unsigned long long)(off + len));
-    }
-    *out = buf;
-    *n = (size_t)len;
-    return VV_OK;
+    bs_local loc;
+    bs_local_init(&loc, a->root, a->real);
+    return loc.base.ops->get_many(&loc.base, g, n);
 }
 
 /* The object @p key of the store loaded as JSON (at most ZR_JSON_MAX
@@ -898,6 +835,10 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
      * decodes it from (an inner chunk of a shard) */
     const uint64_t per = (uint64_t)J.cbytes + vv_zr_read_held(ap, J.cbytes);
     int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
+    /* a remote store's reads wait on the network: as many at once as the
+     * transport keeps in flight */
+    if (bs_is_url(ap->root) && nthreads > 1 && bs_http_in_flight() > nthreads)
+        nthreads = bs_http_in_flight();
     const uint64_t budget = vv_memory_budget_get();
     if (per * (uint64_t)nthreads > budget)
         nthreads = budget / per > 1 ? (int)(budget / per) : 1;
@@ -998,7 +939,7 @@ vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) 
     *out = NULL;
     vv_status s = read_store(out, path, opt);
     if (s != VV_OK)
-        return vv_error_prefix(s, "zarr: %s", vv_path_basename(path));
+        return vv_error_prefix(s, "zarr: %s", bs_name(path));
     return VV_OK;
 }
 

@@ -1,0 +1,110 @@
+/*
+ * Byte sources under the chunked stores (not installed): where a store's
+ * objects come from -- a local folder (pread), or HTTP(S) and S3
+ * (libcurl; bytesrc_http.c). The readers (zarr_read.c, zarr3.c) ask for
+ * (key, offset, length) through zr_store_get and zr_store_get_many and
+ * never know which. Remote fetches run in this process (the library), not
+ * in the reader sandbox: the bytes are checked and decoded by our own
+ * parsers, as a local store's are (docs/security.md, "Remote data").
+ */
+#ifndef VOLVIS_IO_BYTESRC_H
+#define VOLVIS_IO_BYTESRC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "volvis/core.h"
+
+/* off: the last len bytes; len: to the end of the object (zarr.h's ZR_SUFFIX, ZR_ALL) */
+#define BS_SUFFIX UINT64_MAX
+#define BS_ALL UINT64_MAX
+
+/* One read of a batch: in, the object's key (relative to the store's
+ * root), bytes [off, off + len) (off BS_SUFFIX: the last len bytes; len
+ * BS_ALL: to the end; len 0: only whether it exists and its size), at
+ * most max bytes; out, a new buffer *out (free it) of n bytes, the
+ * object's size (UINT64_MAX when the server did not say), missing = 1
+ * when the object is absent (out NULL). */
+typedef struct bs_get {
+    const char *key;
+    uint64_t off, len, max;
+    unsigned char *out;
+    size_t n;
+    uint64_t size;
+    int missing;
+} bs_get;
+
+typedef struct vv_bytesrc vv_bytesrc;
+
+/* A byte source's operations. get_many reads @p n ranges (all of them in
+ * flight at once where the source can); VV_OK when every one is read or
+ * missing, else the status and error of the first failing one in order
+ * (the others' buffers freed). Thread-safe: many threads may call at once.
+ * close frees the source. */
+typedef struct vv_bytesrc_ops {
+    const char *name; /* "local", "http", "s3" */
+    vv_status (*get_many)(vv_bytesrc *src, bs_get *g, int n);
+    void (*close)(vv_bytesrc *src);
+} vv_bytesrc_ops;
+
+struct vv_bytesrc {
+    const vv_bytesrc_ops *ops;
+};
+
+/* A local folder's source: objects are files beneath @p root, refused
+ * when they resolve (links) outside @p real ("" unchecked). On the stack:
+ * no close needed. */
+typedef struct bs_local {
+    vv_bytesrc base;
+    const char *root, *real;
+} bs_local;
+void bs_local_init(bs_local *s, const char *root, const char *real);
+
+/* 1 when @p path names a remote store: http://, https:// or s3://. */
+int bs_is_url(const char *path);
+
+/* The name of store @p path in messages: a URL whole, a local path's base name. */
+const char *bs_name(const char *path);
+
+/* The remote source of the store at URL @p root (http, https, s3), made
+ * on first use and kept for the process's life (its connections reused by
+ * every later read); NULL with the error set (a malformed URL). */
+vv_bytesrc *bs_remote(const char *root);
+
+/* The number of requests the remote transport keeps in flight
+ * (VOLVIS_HTTP_MAX_IN_FLIGHT, default 32): the threads a reader of a
+ * remote store may wait on at once. */
+int bs_http_in_flight(void);
+
+/* ---- S3 addressing (bytesrc_http.c; unit-tested) ---------------------- */
+
+/* Where the objects of an S3 or HTTP root URL are and how they are asked
+ * for. */
+typedef struct bs_target {
+    char base[4096];  /* the http(s) URL of the root (no trailing '/') */
+    char shown[4096]; /* the root as given, without user information: in messages */
+    int s3;           /* an S3 bucket (403 on a key may mean absent; signed) */
+    int path_style;   /* S3: the bucket in the path (an endpoint, s3.REGION) */
+    char bucket[256];
+    char region[64];
+    int sign; /* SigV4 with the credentials below */
+    char key_id[256], secret[256], token[4096];
+    char cred_from[128]; /* where the credentials came from (never the credentials) */
+} bs_target;
+
+/* Parses @p url into @p t: http(s):// (an S3 virtual-host or path-style
+ * address of amazonaws.com, or an address under @p endpoint, is S3), or
+ * s3://bucket/key (path-style under @p endpoint when given, else the
+ * bucket's virtual host in the region). @p endpoint (AWS_ENDPOINT_URL) and
+ * @p region (AWS_REGION) may be NULL. Credentials are not looked up here.
+ * Errors: VV_ERR_INVALID (a malformed URL, naming it). */
+vv_status bs_target_parse(bs_target *t, const char *url, const char *endpoint, const char *region);
+
+/* The S3 credentials and region of the environment into @p t:
+ * AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY, AWS_SESSION_TOKEN, else the
+ * profile AWS_PROFILE (default "default") of AWS_SHARED_CREDENTIALS_FILE
+ * (~/.aws/credentials) and AWS_CONFIG_FILE (~/.aws/config); none (or
+ * AWS_NO_SIGN_REQUEST=YES): anonymous (t->sign 0). */
+void bs_target_credentials(bs_target *t);
+
+#endif

@@ -1,0 +1,227 @@
+#!/usr/bin/env python3
+"""OME-Zarr stores served by nginx over HTTP and HTTPS, read by URL.
+
+  http_nginx_cli.py VOLVIS OUTDIR
+
+Run with the .venv of scripts/install-deps.sh test (vv_pypi_test). zarr-python 3
+writes a sharded + zstd NGFF 0.5 pyramid (3 levels) and its Zarr v2 twin; nginx
+(Debian's nginx-light, one process, a configuration of its own in OUTDIR, a free
+loopback port; not the system's service) serves OUTDIR over HTTP and over HTTPS
+with a test CA made here with openssl. Checked:
+
+- `volvis info URL` is `volvis info DIR` but for the name, v3 and v2, HTTP and HTTPS
+  (HTTP/2 there, as nginx's log says);
+- `volvis render URL` (MIP, composite; whole and out of core; on 2 MPI ranks when
+  mpirun is there) and `volvis slice URL` are the local PNGs byte for byte; `volvis convert URL --level 2 out.nrrd` the local one's voxels;
+- nginx's access log: the shards are read by range (206 with a Range header), and
+  reading level 2 fetches no shard of levels 0 and 1;
+- `--cache-dir`: a second read is answered 304 (If-None-Match) and read from the cache,
+  the same voxels; VOLVIS_HTTP_CACHE_MAX bounds it;
+- HTTPS without the test CA: one line naming the URL (the certificate refused);
+  a store that is not there: one line naming the URL.
+"""
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+try:
+    import numpy as np  # noqa: F401
+    import zarr  # noqa: F401
+except ImportError as e:  # pragma: no cover
+    print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
+    sys.exit(77)
+from cli_common import Checks, read_nrrd  # noqa: E402
+from http_common import free_port, make_ca, wait_port, write_stores  # noqa: E402
+
+NGINX = shutil.which("nginx") or ("/usr/sbin/nginx" if os.path.exists("/usr/sbin/nginx") else None)
+if not NGINX:
+    print("skipped: nginx is missing (apt-get install nginx-light)")
+    sys.exit(77)
+
+VOLVIS, OUT = sys.argv[1], os.path.abspath(sys.argv[2])
+shutil.rmtree(OUT, ignore_errors=True)
+os.makedirs(OUT)
+check = Checks()
+www = os.path.join(OUT, "www")
+os.makedirs(www)
+v3, v2 = write_stores(www)
+ca, crt, key = make_ca(OUT)
+port, sport = free_port(), free_port()
+log = os.path.join(OUT, "access.log")
+conf = os.path.join(OUT, "nginx.conf")
+with open(conf, "w") as f:
+    f.write(f"""daemon off;
+master_process off;
+worker_processes 1;
+pid {OUT}/nginx.pid;
+error_log {OUT}/error.log;
+events {{ worker_connections 256; }}
+http {{
+  log_format ranges '$status $request_method "$uri" "$http_range" $body_bytes_sent $server_protocol';
+  access_log {log} ranges;
+  client_body_temp_path {OUT}/tmp_body;
+  proxy_temp_path {OUT}/tmp_proxy;
+  fastcgi_temp_path {OUT}/tmp_fcgi;
+  uwsgi_temp_path {OUT}/tmp_uwsgi;
+  scgi_temp_path {OUT}/tmp_scgi;
+  default_type application/octet-stream;
+  server {{ listen 127.0.0.1:{port}; root {www}; }}
+  server {{
+    listen 127.0.0.1:{sport} ssl http2;
+    ssl_certificate {crt};
+    ssl_certificate_key {key};
+    root {www};
+  }}
+}}
+""")
+nginx = subprocess.Popen([NGINX, "-c", conf, "-p", OUT, "-e", f"{OUT}/error.log"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+env = {k: v for k, v in os.environ.items() if not k.lower().endswith("_proxy")}
+env["SSL_CERT_FILE"] = env["CURL_CA_BUNDLE"] = ca
+
+
+def volvis(*args, e=None):
+    return subprocess.run([VOLVIS, *args], capture_output=True, text=True, env=e or env,
+                          timeout=300)
+
+
+def log_lines():
+    with open(log) as f:
+        return f.read().splitlines()
+
+
+def one_line(p, needle, what):
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    check(p.returncode != 0 and len(lines) == 1 and needle in lines[0],
+          f"{what}: one line naming {needle} ({lines[:3]}, exit {p.returncode})")
+
+
+try:
+    if not (wait_port(port, nginx) and wait_port(sport, nginx)):
+        print("nginx did not start:", nginx.stderr.read().decode() if nginx.stderr else "")
+        sys.exit(1)
+    http = f"http://127.0.0.1:{port}"
+    https = f"https://127.0.0.1:{sport}"
+    for name, local in (("v3", v3), ("v2", v2)):
+        base = os.path.basename(local)
+        pl = volvis("info", local)
+        for scheme, root in (("http", http), ("https", https)):
+            url = f"{root}/{base}"
+            pu = volvis("info", url)
+            check(pl.returncode == 0 and pu.returncode == 0 and
+                  pu.stdout.replace(url, local) == pl.stdout and "levels" in pl.stdout.lower(),
+                  f"info {name} over {scheme} equals the local info but for the name "
+                  f"({pu.stderr.strip()})")
+        url = f"{http}/{base}"
+        for mode, extra in (("mip", ["--mode", "mip", "--tf", "50:1000"]),
+                            ("composite", ["--mode", "composite", "--tf", "50:1000"]),
+                            ("mip-ooc", ["--mode", "mip", "--tf", "50:1000", "--memory-limit",
+                                         "64M", "--level", "0"])):
+            a, b = (os.path.join(OUT, f"{name}_{mode}_{w}.png") for w in ("local", "url"))
+            p1 = volvis("render", local, "-o", a, "--size", "96x96", *extra)
+            p2 = volvis("render", url, "-o", b, "--size", "96x96", *extra)
+            same = p1.returncode == 0 and p2.returncode == 0 and \
+                open(a, "rb").read() == open(b, "rb").read()
+            check(same, f"render {name} {mode} by URL is the local PNG byte for byte "
+                  f"({p1.stderr.strip()} {p2.stderr.strip()})")
+    # the same over HTTPS (HTTP/2 where nginx offers it)
+    a, b = (os.path.join(OUT, f"tls_{w}.png") for w in ("local", "url"))
+    p1 = volvis("render", v3, "-o", a, "--size", "96x96", "--mode", "mip")
+    p2 = volvis("render", f"{https}/pyr3.ome.zarr", "-o", b, "--size", "96x96", "--mode", "mip")
+    check(p1.returncode == 0 and p2.returncode == 0 and
+          open(a, "rb").read() == open(b, "rb").read(),
+          f"render over HTTPS with the test CA is the local PNG ({p2.stderr.strip()})")
+    protos = {ln.split()[-1] for ln in log_lines()}
+    check("HTTP/2.0" in protos and "HTTP/1.1" in protos,
+          f"HTTP/2 over TLS, HTTP/1.1 in the clear ({sorted(protos)})")
+    # slice, and MPI ranks (each opens the URL through the same door)
+    a, b = (os.path.join(OUT, f"slice_{w}.png") for w in ("local", "url"))
+    p1 = volvis("slice", v3, "-o", a)
+    p2 = volvis("slice", f"{http}/pyr3.ome.zarr", "-o", b)
+    check(p1.returncode == 0 and p2.returncode == 0 and
+          open(a, "rb").read() == open(b, "rb").read(),
+          f"slice by URL is the local PNG ({p2.stderr.strip()})")
+    mpirun = shutil.which("mpirun")
+    if mpirun:
+        a, b = (os.path.join(OUT, f"mpi_{w}.png") for w in ("local", "url"))
+        how = ["--size", "96x96", "--mode", "mip"]
+        run = [mpirun, "--oversubscribe", "-n", "2"] + (["--allow-run-as-root"]
+                                                         if os.geteuid() == 0 else [])
+        p1 = subprocess.run(run + [VOLVIS, "render", v3, "-o", a, *how], capture_output=True,
+                            text=True, env=env, timeout=120)
+        p2 = subprocess.run(run + [VOLVIS, "render", f"{http}/pyr3.ome.zarr", "-o", b, *how],
+                            capture_output=True, text=True, env=env, timeout=120)
+        check(p1.returncode == 0 and p2.returncode == 0 and "2 ranks" in p2.stdout and
+              open(a, "rb").read() == open(b, "rb").read(),
+              f"render by URL on 2 MPI ranks is the local PNG ({p2.stderr.strip()[-300:]})")
+    # shards by range; level 2 alone reads no shard of levels 0 and 1
+    open(log, "w").close()
+    os.kill(nginx.pid, signal.SIGUSR1)  # reopen the log
+    import time
+    time.sleep(0.3)
+    for lvl in ("2",):
+        o1, o2 = (os.path.join(OUT, f"l{lvl}_{w}.nrrd") for w in ("local", "url"))
+        p1 = volvis("convert", v3, o1, "--level", lvl, "--quiet")
+        p2 = volvis("convert", f"{http}/pyr3.ome.zarr", o2, "--level", lvl, "--quiet")
+        ok = p1.returncode == 0 and p2.returncode == 0
+        if ok:
+            x1, s1, g1 = read_nrrd(o1)
+            x2, s2, g2 = read_nrrd(o2)
+            ok = np.array_equal(x1, x2) and s1 == s2 and g1 == g2
+        check(ok, f"convert --level {lvl} by URL equals the local read ({p2.stderr.strip()})")
+    lines = log_lines()
+    shard = re.compile(r'^(\d+) GET "/pyr3\.ome\.zarr/(\d)/c/[0-9/]+" "([^"]*)"')
+    reads = [shard.match(ln) for ln in lines]
+    reads = [m for m in reads if m]
+    check(len(reads) > 0 and all(m.group(1) == "206" and m.group(3).startswith("bytes=")
+                                 for m in reads),
+          f"every shard read is a range answered 206 ({len(reads)} reads; "
+          f"{[m.group(0) for m in reads if m.group(1) != '206'][:3]})")
+    finer = [m.group(0) for m in reads if m.group(2) in ("0", "1")]
+    check(not finer and any(m.group(2) == "2" for m in reads),
+          f"reading level 2 fetches no shard of levels 0 and 1 ({finer[:3]})")
+    # --cache-dir: a second read sends If-None-Match and takes the bytes from the
+    # cache on 304; a small bound is kept
+    cache = os.path.join(OUT, "cache")
+    o1, o2, o3 = (os.path.join(OUT, f"cache{i}.nrrd") for i in (1, 2, 3))
+    p1 = volvis("convert", f"{http}/pyr3.ome.zarr", o1, "--level", "2", "--quiet",
+                "--cache-dir", cache)
+    open(log, "w").close()
+    os.kill(nginx.pid, signal.SIGUSR1)
+    time.sleep(0.3)
+    p2 = volvis("--cache-dir", cache, "convert", f"{http}/pyr3.ome.zarr", o2, "--level", "2",
+                "--quiet")
+    reads = [m for m in (shard.match(ln) for ln in log_lines()) if m]
+    ok = p1.returncode == 0 and p2.returncode == 0 and \
+        np.array_equal(read_nrrd(o1)[0], read_nrrd(o2)[0]) and \
+        np.array_equal(read_nrrd(o2)[0], read_nrrd(os.path.join(OUT, "l2_local.nrrd"))[0])
+    check(ok and reads and all(m.group(1) == "304" for m in reads),
+          f"--cache-dir: the second read's shard requests are all answered 304 from the cache "
+          f"({len(reads)} reads, {sorted(set(m.group(1) for m in reads))}; "
+          f"{p2.stderr.strip()})")
+    small = os.path.join(OUT, "cache_small")
+    e = dict(env, VOLVIS_HTTP_CACHE_MAX="40K")
+    p3 = subprocess.run([VOLVIS, "--cache-dir", small, "convert", f"{http}/pyr3.ome.zarr", o3,
+                         "--level", "0", "--quiet"], capture_output=True, text=True, env=e,
+                        timeout=300)
+    held = sum(os.path.getsize(os.path.join(small, f)) for f in os.listdir(small))
+    check(p3.returncode == 0 and 0 < held <= 40 * 1024,
+          f"--cache-dir within VOLVIS_HTTP_CACHE_MAX=40K: {held} bytes held ({p3.stderr.strip()})")
+    # refusals: one line naming the URL
+    noca = {k: v for k, v in env.items() if k not in ("SSL_CERT_FILE", "CURL_CA_BUNDLE")}
+    noca["SSL_CERT_FILE"] = noca["CURL_CA_BUNDLE"] = "/etc/ssl/certs/ca-certificates.crt"
+    one_line(volvis("info", f"{https}/pyr3.ome.zarr", e=noca), f"{https}/pyr3.ome.zarr",
+             "HTTPS with a certificate no CA of the system's signed")
+    one_line(volvis("info", f"{http}/nothing.ome.zarr"), f"{http}/nothing.ome.zarr",
+             "a store that is not there")
+finally:
+    nginx.terminate()
+    try:
+        nginx.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        nginx.kill()
+check.finish("http_nginx_cli")
