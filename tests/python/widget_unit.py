@@ -261,6 +261,15 @@ check(v.slice_index["axial"] == 10 and any(h["axis"] == "axial" and h["index"] =
 
 v.close()
 check(not v._thread.is_alive(), "close() stops the render thread")
+for bad, err, text in (("/nonexistent/x.nrrd", volvis.FileError, "/nonexistent/x.nrrd"),
+                       (42, volvis.InvalidError, "got int")):
+    try:
+        widgets.View(bad)
+        got = None
+    except Exception as e:
+        got = e
+    check(isinstance(got, err) and text in str(got) and "\n" not in str(got),
+          "View(%r): %s" % (bad, got))
 w = volvis.World.open(HEAD)
 w.view.size = (64, 48)
 shown = volvis.show(w, interactive=True)
