@@ -6,8 +6,11 @@ chromedriver), runs the View cell, waits for the widget's first full frame,
 drags on it with the mouse (ActionChains), and checks that the canvas shows
 a different image, that the frames while dragging were reduced ones, that
 a full frame follows the drag, and that the camera the next cell prints
-(the Python side's eye trait) moved. Screenshots of the notebook go to
-OUT_DIR (lab_before.png, lab_after.png). The server and the browser are
+(the Python side's eye trait) moved at the same distance from the look-at
+point; then the wheel and a two-finger touch pinch (WebDriver touch
+pointers) must zoom by 1.1^3 (300 px of wheel) times 3 (the fingers' final
+over first distance). Screenshots of the notebook go to OUT_DIR
+(lab_before.png, lab_after.png, lab_zoomed.png). The server and the browser are
 stopped whatever happens.
 
 Usage: widget_jupyterlab.py [BUILD_PYTHON_DIR OUT_DIR]. Exit 77 when
@@ -48,6 +51,9 @@ try:
     from selenium.webdriver.chrome.options import Options
     from selenium.webdriver.chrome.service import Service
     from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.actions import interaction
+    from selenium.webdriver.common.actions.action_builder import ActionBuilder
+    from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
     from selenium.webdriver.common.by import By
     from selenium.webdriver.common.keys import Keys
 except ImportError as e:
@@ -90,12 +96,15 @@ def wait_until(fn, timeout, what):
     raise TimeoutError("waited %.0f s for %s" % (timeout, what))
 
 
+CAMERA = ("import json; v.wait(); print('%s', json.dumps({'eye': v.eye, 'at': v.at, "
+          "'stats': v.stats}))")
 CELLS = [
     "from volvis.widgets import View\n"
     "v = View(%r, size=(384, 288), preset='ct-bone', slices=True)\n"
-    "print('EYE0', v.eye)\n"
+    "import json; print('CAM0', json.dumps({'eye': v.eye, 'at': v.at}))\n"
     "v" % str(HEAD),
-    "v.wait(); print('EYE1', v.eye, 'STATS', v.stats)",
+    CAMERA % "CAM1",
+    CAMERA % "CAM2",
 ]
 
 OUT.mkdir(parents=True, exist_ok=True)
@@ -200,23 +209,54 @@ try:
     check(any(k and k.startswith("raycast_1/") for k in kinds),
           "reduced frames were shown while dragging: %s" % sorted(k for k in kinds if k))
 
-    # the Python side: the next cell prints the eye trait
-    run_cell(1)
+    # the Python side: the next cell prints the camera traits
+    def camera(i):
+        run_cell(i)
 
-    def printed():
-        text = driver.execute_script(
-            "return [...document.querySelectorAll('.jp-OutputArea-output')]"
-            ".map(e => e.innerText).join('\\n');")
-        return text if "EYE0" in text and "EYE1" in text else None
-    text = wait_until(printed, 60, "the printed cameras")
-    line0 = next(ln for ln in text.splitlines() if ln.startswith("EYE0"))
-    line1 = next(ln for ln in text.splitlines() if ln.startswith("EYE1"))
-    eye0 = json.loads(line0[4:].strip())
-    eye1 = json.loads(line1[4:line1.index("STATS")].strip())
-    stats = line1[line1.index("STATS") + 5:].strip()
-    moved = sum((a - b) ** 2 for a, b in zip(eye0, eye1)) ** 0.5
-    check(moved > 1.0, "the eye trait moved by %.1f world units: %s -> %s" % (moved, eye0, eye1))
-    print("stats:", stats)
+        def printed():
+            text = driver.execute_script(
+                "return [...document.querySelectorAll('.jp-OutputArea-output')]"
+                ".map(e => e.innerText).join('\\n');")
+            return text if "CAM%d" % i in text else None
+        text = wait_until(printed, 60, "cell %d's camera" % i)
+        cams = {ln[:4]: json.loads(ln[4:]) for ln in text.splitlines() if ln.startswith("CAM")}
+        return cams["CAM0"], cams["CAM%d" % i]
+
+    def dist(c):
+        return sum((a - b) ** 2 for a, b in zip(c["eye"], c["at"])) ** 0.5
+    cam0, cam1 = camera(1)
+    moved = sum((a - b) ** 2 for a, b in zip(cam0["eye"], cam1["eye"])) ** 0.5
+    check(moved > 1.0, "the eye trait moved by %.1f world units: %s -> %s"
+          % (moved, cam0["eye"], cam1["eye"]))
+    check(abs(dist(cam1) - dist(cam0)) < 1e-6 * dist(cam0),
+          "the drag orbited: the eye's distance from the look-at point is kept")
+    print("stats:", cam1["stats"])
+
+    # the wheel (300 px up: 1.1^3 closer) and a two-finger pinch (touch pointers
+    # spreading from 60 to 180 px apart: 3 times closer, the midpoint fixed)
+    ActionChains(driver).scroll_from_origin(ScrollOrigin.from_element(canvas), 0, -300) \
+        .perform()
+    seq2 = wait_until(lambda: sharp_seq() > seq1 and sharp_seq(), 60, "a full frame after the wheel")
+    ab = ActionBuilder(driver)
+    f1 = ab.add_pointer_input(interaction.POINTER_TOUCH, "finger1")
+    f2 = ab.add_pointer_input(interaction.POINTER_TOUCH, "finger2")
+    f1.create_pointer_move(x=-30, y=0, origin=canvas)
+    f2.create_pointer_move(x=30, y=0, origin=canvas)
+    f1.create_pointer_down()
+    f2.create_pointer_down()
+    for k in range(1, 7):
+        f1.create_pointer_move(x=-30 - 10 * k, y=0, origin=canvas, duration=30)
+        f2.create_pointer_move(x=30 + 10 * k, y=0, origin=canvas, duration=30)
+    f1.create_pointer_up(0)
+    f2.create_pointer_up(0)
+    ab.perform()
+    wait_until(lambda: sharp_seq() > seq2 and sharp_seq(), 60, "a full frame after the pinch")
+    driver.save_screenshot(str(OUT / "lab_zoomed.png"))
+    _, cam2 = camera(2)
+    ratio = dist(cam1) / dist(cam2)
+    want = 1.1 ** 3 * 3.0
+    check(abs(ratio / want - 1) < 0.02, "wheel and pinch zoomed %.3f times (want 1.1^3 x 3 = %.3f)"
+          % (ratio, want))
 except BaseException:
     if driver is not None:
         driver.save_screenshot(str(OUT / "lab_failed.png"))
