@@ -56,6 +56,7 @@ try:
     from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
     from selenium.webdriver.common.by import By
     from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import Select
 except ImportError as e:
     skip("%s (bash scripts/install-deps.sh test makes .venv)" % e)
 if not (os.path.exists(CHROMIUM) and os.path.exists(CHROMEDRIVER)):
@@ -97,7 +98,7 @@ def wait_until(fn, timeout, what):
 
 
 CAMERA = ("import json; v.wait(); print('%s', json.dumps({'eye': v.eye, 'at': v.at, "
-          "'stats': v.stats}))")
+          "'mode': v.mode, 'preset': v.preset, 'stats': v.stats}))")
 CELLS = [
     "from volvis.widgets import View\n"
     "v = View(%r, size=(384, 288), preset='ct-bone', slices=True)\n"
@@ -250,11 +251,19 @@ try:
     f1.create_pointer_up(0)
     f2.create_pointer_up(0)
     ab.perform()
-    wait_until(lambda: sharp_seq() > seq2 and sharp_seq(), 60, "a full frame after the pinch")
+    seq3 = wait_until(lambda: sharp_seq() > seq2 and sharp_seq(), 60,
+                      "a full frame after the pinch")
     driver.save_screenshot(str(OUT / "lab_zoomed.png"))
+    # the menus set the mode and preset traits
+    Select(driver.find_element(By.CSS_SELECTOR, "select.volvis-mode")).select_by_value("mip")
+    wait_until(lambda: sharp_seq() > seq3 and sharp_seq(), 60, "a full frame after the mode")
+    Select(driver.find_element(By.CSS_SELECTOR, "select.volvis-preset")) \
+        .select_by_value("ct-soft-tissue")
     _, cam2 = camera(2)
     ratio = dist(cam1) / dist(cam2)
     want = 1.1 ** 3 * 3.0
+    check(cam2["mode"] == "mip" and cam2["preset"] == "ct-soft-tissue",
+          "the menus set mode and preset: %s, %s" % (cam2["mode"], cam2["preset"]))
     check(abs(ratio / want - 1) < 0.02, "wheel and pinch zoomed %.3f times (want 1.1^3 x 3 = %.3f)"
           % (ratio, want))
 except BaseException:
