@@ -41,7 +41,8 @@ except ImportError as e:  # pragma: no cover - reported on import
     raise ImportError("volvis.widgets needs anywidget (pip install 'volvis[widget]' or "
                       "pip install anywidget): %s" % e) from e
 
-__all__ = ["View", "PREVIEW_BUDGET", "MIN_PERIOD", "STILL_AFTER", "JPEG_MOVING", "JPEG_STILL"]
+__all__ = ["View", "PREVIEW_BUDGET", "MIN_PERIOD", "STILL_AFTER", "JPEG_MOVING", "JPEG_STILL",
+           "PROGRESSIVE_CHUNKS"]
 
 _HERE = pathlib.Path(__file__).resolve().parent
 
@@ -54,6 +55,8 @@ STILL_AFTER = 0.5
 #: JPEG qualities of moving and still frames (SRV_JPEG_MOVING, SRV_JPEG_STILL).
 JPEG_MOVING = 60
 JPEG_STILL = 90
+#: Chunks a reduced frame of a file out of core may read (SRV_PROGRESSIVE_CHUNKS).
+PROGRESSIVE_CHUNKS = 64
 
 _MODES = ("composite", "mip", "minip", "xray", "iso")
 _AXES = ("axial", "coronal", "sagittal")
@@ -153,8 +156,10 @@ class View(anywidget.AnyWidget):
         out = ffi.new("vv_preview **")
         check(lib.vv_preview_new(out, cstr(self._renderer)))
         self._preview = ffi.gc(out[0], lib.vv_preview_free)
-        check(lib.vv_renderer_apply_settings(lib.vv_preview_final_renderer(self._preview),
-                                             ffi.addressof(w._c, "render")))
+        if (w.renderer or "raycast") == self._renderer:
+            # the World's render settings (options, quality) are its renderer's
+            check(lib.vv_renderer_apply_settings(lib.vv_preview_final_renderer(self._preview),
+                                                 ffi.addressof(w._c, "render")))
         self._policy = ffi.new("vv_preview_policy *")
         lib.vv_preview_policy_init(self._policy)
         self._cond = threading.Condition()
@@ -476,6 +481,15 @@ class View(anywidget.AnyWidget):
         ro.quality = 2 if q < 0 else q
         if cancel is not None:
             ro.progress = lib.vvpy_progress_get(cancel)
+        # files out of core: a full frame by level of detail as volvis.render (a
+        # voxel at most a pixel); a reduced one progressive, reading at most 64
+        # chunks, as volvis serve draws its previews
+        lod = ffi.new("vv_lod *")
+        lib.vv_lod_init(lod)
+        if kind != lib.VV_PREVIEW_FULL:
+            lod.progressive = 1
+            lod.load_budget = PROGRESSIVE_CHUNKS
+        ro.lod = lod
         t0 = time.perf_counter()
         st = lib.vv_preview_render(self._preview, snap._c, ffi.addressof(snap._c, "view"), kind,
                                    ro, img)

@@ -10,7 +10,8 @@ vv_nav_view_rotate moves a copy of the camera, and ends with a full frame;
 camera (newest wins); setting mode, preset and camera from Python
 re-renders; snapshot() is (h, w, 4) uint8 and equals `volvis render` of the
 World saved as a scene, bit for bit; the JPEG of the final frame is within
-JPEG's loss of it; bad traits are refused; the slice views.
+JPEG's loss of it; bad traits are refused; the slice views; a .vvb
+pyramid out of core (previews, then the full frame equal to volvis.render).
 
 Usage: widget_unit.py [BUILD_PYTHON_DIR VOLVIS_CLI OUT_DIR]. Exit 77 when
 anywidget or Pillow is missing (.venv from scripts/install-deps.sh test)."""
@@ -276,5 +277,28 @@ shown = volvis.show(w, interactive=True)
 check(isinstance(shown, widgets.View) and shown.width == 64 and shown.wait(30),
       "volvis.show gives the View when anywidget is installed")
 shown.close()
+# ---- a file out of core (a .vvb pyramid): previews read progressively, the full
+# frame by level of detail equals volvis.render of the same World
+vvb = OUT / "head.vvb"
+r = subprocess.run([CLI, "convert", str(HEAD), str(vvb)], capture_output=True, text=True)
+check(r.returncode == 0, "volvis convert to .vvb: %s" % r.stderr.strip()[:200])
+if r.returncode == 0:
+    v = widgets.View(volvis.World.open(vvb, memory="out_of_core"), size=(128, 96))
+    cat = Catcher()
+    v.send = cat
+    check(v.wait(60), "out of core: the first full frame")
+    for i in range(6):
+        msg(v, type="motion", motion="rotate", dx=8, dy=0, factor=1)
+        time.sleep(0.05)
+    gen = v._gen
+    msg(v, type="end")
+    hs, _ = cat.wait_sharp(gen, 60)
+    check(hs is not None and any(not h["sharp"] for h, _ in cat.of("frame")),
+          "out of core: reduced frames while dragging, then the full one (%s)"
+          % [h["kind"] for h, _ in cat.of("frame")])
+    check(np.array_equal(v.snapshot(), volvis.render(v.world.clone())),
+          "out of core: snapshot() equals volvis.render")
+    v.close()
+
 print("widget_unit: %.1f s, %d failures" % (time.monotonic() - t_start, len(failures)))
 sys.exit(1 if failures else 0)
