@@ -8,8 +8,9 @@ a different image, that the frames while dragging were reduced ones, that
 a full frame follows the drag, and that the camera the next cell prints
 (the Python side's eye trait) moved at the same distance from the look-at
 point; then the wheel and a two-finger touch pinch (WebDriver touch
-pointers) must zoom by 1.1^3 (300 px of wheel) times 3 (the fingers' final
-over first distance). Screenshots of the notebook go to OUT_DIR
+pointers) and the + key must zoom by 1.1^3 (300 px of wheel) times 3 (the
+fingers' final over first distance) times 1.1; the mode and preset menus
+and the axial slice slider must set their traits. Screenshots of the notebook go to OUT_DIR
 (lab_before.png, lab_after.png, lab_zoomed.png). The server and the browser are
 stopped whatever happens.
 
@@ -98,7 +99,8 @@ def wait_until(fn, timeout, what):
 
 
 CAMERA = ("import json; v.wait(); print('%s', json.dumps({'eye': v.eye, 'at': v.at, "
-          "'mode': v.mode, 'preset': v.preset, 'stats': v.stats}))")
+          "'mode': v.mode, 'preset': v.preset, 'slice_index': v.slice_index, "
+          "'stats': v.stats}))")
 CELLS = [
     "from volvis.widgets import View\n"
     "v = View(%r, size=(384, 288), preset='ct-bone', slices=True)\n"
@@ -259,13 +261,26 @@ try:
     wait_until(lambda: sharp_seq() > seq3 and sharp_seq(), 60, "a full frame after the mode")
     Select(driver.find_element(By.CSS_SELECTOR, "select.volvis-preset")) \
         .select_by_value("ct-soft-tissue")
+    # a key on the focused view: + zooms 1.1 times
+    seq4 = wait_until(lambda: sharp_seq(), 60, "a full frame after the preset")
+    canvas.send_keys("+")
+    wait_until(lambda: sharp_seq() > seq4, 60, "a full frame after the + key")
+    # the axial slice slider
+    driver.execute_script(
+        "const r = document.querySelector('.volvis-slice input[aria-label=\"axial slice index\"]');"
+        "r.value = '10'; r.dispatchEvent(new Event('input'));")
+    label = wait_until(lambda: driver.execute_script(
+        "const t = document.querySelector('.volvis-slice figcaption span').textContent;"
+        "return t.startsWith('axial 11/') ? t : null;"), 30, "the axial view at slice 10")
     _, cam2 = camera(2)
     ratio = dist(cam1) / dist(cam2)
-    want = 1.1 ** 3 * 3.0
+    want = 1.1 ** 3 * 3.0 * 1.1
     check(cam2["mode"] == "mip" and cam2["preset"] == "ct-soft-tissue",
           "the menus set mode and preset: %s, %s" % (cam2["mode"], cam2["preset"]))
-    check(abs(ratio / want - 1) < 0.02, "wheel and pinch zoomed %.3f times (want 1.1^3 x 3 = %.3f)"
-          % (ratio, want))
+    check(abs(ratio / want - 1) < 0.02, "wheel, pinch and + key zoomed %.3f times "
+          "(want 1.1^3 x 3 x 1.1 = %.3f)" % (ratio, want))
+    check(cam2["slice_index"].get("axial") == 10, "the slider moved the axial view: %s, %r"
+          % (cam2["slice_index"], label))
 except BaseException:
     if driver is not None:
         driver.save_screenshot(str(OUT / "lab_failed.png"))
