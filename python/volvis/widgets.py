@@ -110,8 +110,9 @@ class View(anywidget.AnyWidget):
     after the user drags to get the new values): ``eye``, ``at``, ``up``
     (world units, [x, y, z]) and ``fov`` (degrees): the World's camera
     (vv_view); ``mode`` ("composite", "mip", "minip", "xray", "iso") of every
-    volume object; ``preset`` (a :func:`volvis.tf_presets` name placed on the
-    first volume's values, or "" for the World's own transfer function);
+    volume object; ``preset`` (a :func:`volvis.tf_presets` name placed on
+    each volume's values, or "": the transfer functions the World had, or the
+    last ``tf`` set);
     ``tf``: the transfer function of the first volume object as
     ``{"opacity": [[value, a], ...], "color": [[value, r, g, b], ...],
     "unit_distance": d}`` (setting it sets every volume object's);
@@ -185,12 +186,15 @@ class View(anywidget.AnyWidget):
         from .render import renderers
         info = renderers.get(self._renderer)
         modes = [m for m in _MODES if info is None or m in info.modes]
+        self._syncing = True  # the traits take the World's values; nothing to apply
         super().__init__(eye=list(v.eye), at=list(v.at), up=list(v.up), fov=v.fov,
                          width=v.size[0], height=v.size[1],
                          mode=self._world_mode() if mode is None else mode,
                          presets=tf_presets(), modes=modes, slices=bool(slices),
                          tf=self._tf_dict(vol) if vol is not None else {},
                          slice_index={a: -1 for a in _AXES}, **kw)
+        self._syncing = False
+        self._keep_own_tfs()
         if mode is not None:
             self._apply_mode(mode)
         if preset:
@@ -314,14 +318,21 @@ class View(anywidget.AnyWidget):
             self._apply_mode(change["new"])
             self._changed_locked()
 
+    def _keep_own_tfs(self):
+        """Keeps the volume objects' transfer functions (preset "" restores them)."""
+        self._own_tfs = [ffi.new("vv_tf *", o.tf) for o in self._volume_objects()]
+
     @tr.observe("preset")
     def _preset_changed(self, change):
         name = change["new"]
-        if not name:
+        if not name and self._syncing:
             return
         with self._cond:
-            for o in self._volume_objects():
-                check(lib.vv_tf_preset(ffi.addressof(o, "tf"), cstr(name), o.volume))
+            for i, o in enumerate(self._volume_objects()):
+                if name:
+                    check(lib.vv_tf_preset(ffi.addressof(o, "tf"), cstr(name), o.volume))
+                elif i < len(self._own_tfs):
+                    o.tf = self._own_tfs[i][0]
             o = self._first_volume()
             self._syncing = True
             try:
@@ -341,6 +352,7 @@ class View(anywidget.AnyWidget):
         with self._cond:
             for o in self._volume_objects():
                 o.tf = t._value()
+            self._keep_own_tfs()
             self._syncing = True
             try:
                 self.preset = ""

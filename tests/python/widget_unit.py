@@ -104,6 +104,10 @@ v.send = cat
 check(v.wait(30), "the first full frame is drawn")
 check(v.width == W and v.height == H and v.preset == "ct-bone", "size and preset traits")
 check(v.tf["opacity"] and v.tf["color"], "the tf trait holds the preset's points")
+own = volvis.World.open(HEAD).objects[0].tf.opacity
+check(len(v._own_tfs) == 1 and np.allclose(
+    volvis.TransferFunction._at(v._own_tfs[0], None).opacity, own),
+    "the World's own transfer function is kept for preset ''")
 check(v.mode == "composite" and "mip" in v.modes and "ct-bone" in v.presets, "mode, modes, presets")
 
 # the page asks for the newest frame when it shows the widget
@@ -213,6 +217,14 @@ hs, _ = cat.wait_sharp(gen + 1)
 check(hs is not None and v.preset == "" and
       np.allclose(v.world.objects[0].tf.opacity, tf["opacity"]),
       "setting tf re-renders with those points, and clears preset")
+v.preset = "ct-bone"
+check(v.tf["opacity"] != tf["opacity"], "a preset replaces the tf set")
+gen = v._gen
+v.preset = ""
+hs, _ = cat.wait_sharp(gen + 1)
+check(hs is not None and v.tf["opacity"] == [[float(a), float(b)] for a, b in tf["opacity"]] and
+      np.allclose(v.world.objects[0].tf.opacity, tf["opacity"]),
+      "preset '' puts back the last tf set, and re-renders")
 v.orbit(30, 10, 1.2)
 check(v.wait() and np.allclose(v.eye, v.world.view.eye), "orbit() moves the traits and re-renders")
 
