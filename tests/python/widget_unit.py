@@ -191,6 +191,27 @@ snap = v.snapshot()
 p = psnr(np.asarray(Image.open(io.BytesIO(bs[0]))), snap[:, :, :3])
 check(p > 30, "its JPEG is the newest camera's snapshot: %.1f dB" % p)
 
+# ---- a full frame in progress is cancelled when the camera moves again ---------
+v.width, v.height = 1024, 768
+v.wait()
+cancelled = False
+for attempt in range(5):
+    c0 = v.stats["cancelled"]
+    old = v._cancel  # None, or the finished frame's until its thread lets it go
+    v.orbit(3)
+    end = time.monotonic() + 10
+    while (v._cancel is None or v._cancel is old) and time.monotonic() < end:
+        time.sleep(0.001)
+    msg(v, type="motion", motion="rotate", dx=2, dy=0, factor=1)
+    msg(v, type="end")
+    v.wait()
+    if v.stats["cancelled"] > c0:
+        cancelled = True
+        break
+check(cancelled, "a full frame is cancelled by a newer camera (attempt %d)" % (attempt + 1))
+v.width, v.height = W, H
+v.wait()
+
 # ---- properties set from Python re-render -------------------------------------
 for name, value in (("mode", "mip"), ("preset", "ct-soft-tissue"),
                     ("eye", list(np.add(v.at, [0.0, -400.0, 0.0]))), ("up", [0.0, 0.0, 1.0]),
