@@ -284,6 +284,17 @@ class View(anywidget.AnyWidget):
             raise tr.TraitError("width and height: %d is outside 1..4096" % n)
         return n
 
+    @tr.validate("slice_index")
+    def _valid_slice_index(self, proposal):
+        d = proposal["value"]
+        out = {}
+        for k, i in d.items():
+            if k not in _AXES or isinstance(i, bool) or not isinstance(i, (int, np.integer)):
+                raise tr.TraitError("slice_index: expected {axis: int} with axes %s, got %r"
+                                    % (", ".join(_AXES), d))
+            out[k] = int(i)
+        return out
+
     @tr.validate("fov")
     def _valid_fov(self, proposal):
         f = proposal["value"]
@@ -468,7 +479,12 @@ class View(anywidget.AnyWidget):
                         cancel = ffi.gc(lib.vvpy_progress_new(), lib.vvpy_progress_free)
                         self._cancel = cancel
             if kind is None:
-                self._draw_slices(snap, index, sgen)
+                try:
+                    self._draw_slices(snap, index, sgen)
+                except Exception as e:  # shown on the page; the thread goes on
+                    with self._cond:
+                        self._slices_drawn = sgen
+                    self._set_status("slices: %s" % e)
                 continue
             try:
                 self._draw(snap, kind, gen, seq, cancel)

@@ -251,7 +251,8 @@ check(v.wait() and np.allclose(v.eye, v.world.view.eye), "orbit() moves the trai
 
 # ---- refusals ----------------------------------------------------------------------
 for name, value in (("mode", "bogus"), ("preset", "no-such"), ("fov", 200.0), ("width", 0),
-                    ("up", [0.0, 0.0, 0.0])):
+                    ("up", [0.0, 0.0, 0.0]), ("slice_index", {"axial": "x"}),
+                    ("slice_index", {"oblique": 3})):
     before = getattr(v, name)
     try:
         setattr(v, name, value)
