@@ -1,5 +1,6 @@
-"""Jupyter: PNG encoding for inline display, and ``volvis.show`` (an
-interactive view with ipywidgets, degrading to a static image)."""
+"""Jupyter: PNG encoding for inline display, and ``volvis.show`` (the
+anywidget view of volvis.widgets, else an interactive view with
+ipywidgets, degrading to a static image)."""
 import os
 import tempfile
 import threading
@@ -153,14 +154,18 @@ class Viewer:
 
 def show(world, renderer=None, size=None, interactive=None, **options):
     """Shows a World (or a Volume or an array, in the default scene) in a
-    notebook. With ipywidgets in a Jupyter kernel: an interactive
-    :class:`Viewer` (sliders orbit and zoom the view; previews while moving,
-    refinement when input stops). Elsewhere, or with ``interactive=False``:
+    notebook. In a Jupyter kernel with anywidget installed: the
+    :class:`volvis.widgets.View` widget (drag, wheel and touch on the image;
+    the frame policy of ``volvis serve``), unless renderer options are
+    given. Else with ipywidgets: the older :class:`Viewer` (sliders orbit and
+    zoom the view; previews while moving, refinement when input stops; kept
+    for environments without anywidget, such as Debian's ipywidgets 6).
+    Elsewhere, or with ``interactive=False``:
     the rendered image, displayed inline when IPython is present. The
     environment variable VOLVIS_WIDGETS=0 asks for the static image (for
     headless runs such as ``jupyter nbconvert --execute``, whose client
-    cannot open the widgets of Debian's ipywidgets 6). Returns the Viewer or
-    the image."""
+    cannot open the widgets of Debian's ipywidgets 6). Returns the View,
+    the Viewer or the image."""
     from .render import render
     from .volume import Volume
     from .world import World
@@ -169,6 +174,18 @@ def show(world, renderer=None, size=None, interactive=None, **options):
     if interactive is None:
         interactive = _in_kernel() and os.environ.get("VOLVIS_WIDGETS", "1") != "0"
     if interactive:
+        try:
+            from .widgets import View
+        except ImportError:
+            View = None
+        if View is not None and not options:
+            v = View(world, renderer=renderer, size=size or tuple(world.view.size))
+            try:
+                from IPython.display import display
+                display(v)
+            except ImportError:
+                pass
+            return v
         try:
             import ipywidgets  # noqa: F401
         except ImportError:

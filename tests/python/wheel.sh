@@ -74,7 +74,7 @@ rm -rf "$out/unpacked"
 "$tools/bin/python" -c "import sys, zipfile; zipfile.ZipFile(sys.argv[1]).extractall(sys.argv[2])" \
   "$whl" "$out/unpacked"
 u="$out/unpacked/volvis"
-for f in __init__.py _cli.py lib/libvolvis.so.0 bin/volvis libexec/volvis-reader \
+for f in __init__.py _cli.py widgets.py _widget.js _widget.css lib/libvolvis.so.0 bin/volvis libexec/volvis-reader \
   share/volvis/web/index.html share/volvis/devices/keyboard.json; do
   [ -f "$u/$f" ] || { echo "test_python_wheel: FAIL: volvis/$f is not in the wheel"; exit 1; }
 done
