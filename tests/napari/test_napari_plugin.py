@@ -1,0 +1,165 @@
+"""The napari plug-in (python/volvis/napari, docs/python.md "napari") with
+napari from PyPI under Xvfb: the manifest, the reader's layers, the writer's
+round trip, and the "VolVis 3-D" dock widget against `volvis render` of
+the same World and view, before and after a camera change."""
+import math
+import pathlib
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+
+import volvis
+from conftest import DATA, ROOT, cli
+
+
+def psnr(a, b):
+    a = np.asarray(a, dtype=np.float64)[..., :3]
+    b = np.asarray(b, dtype=np.float64)[..., :3]
+    assert a.shape == b.shape, (a.shape, b.shape)
+    mse = np.mean((a - b) ** 2)
+    return math.inf if mse == 0 else 10 * math.log10(255.0 ** 2 / mse)
+
+
+def test_manifest_valid_and_found(plugin, ct_vvb):
+    import npe2
+    from volvis.napari import MANIFEST
+    # npe2's own validation (the CLI `npe2 validate` on the file)
+    r = subprocess.run([sys.executable, "-m", "npe2", "validate", MANIFEST],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    mf = npe2.PluginManifest.from_file(MANIFEST)
+    assert mf.name == "volvis"
+    assert [w.display_name for w in mf.contributions.widgets] == ["VolVis 3-D"]
+    readers = [rd.plugin_name for rd in plugin.iter_compatible_readers([str(ct_vvb)])]
+    assert "volvis" in readers
+    assert any(w.plugin_name == "volvis" for w in
+               plugin.iter_compatible_writers(["image"])), "no volvis writer for image layers"
+    # the wheel's entry point names this manifest
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    ep = meta["project"]["entry-points"]["napari.manifest"]["volvis"]
+    mod, res = ep.split(":")
+    assert mod == "volvis.napari" and res == "napari.yaml"
+    import importlib.resources
+    assert importlib.resources.files(mod).joinpath(res).is_file()
+
+
+def test_open_vvb_lazy_multiscale(make_napari_viewer, plugin, ct_vvb):
+    v = make_napari_viewer()
+    layers = v.open(str(ct_vvb), plugin="volvis")
+    assert len(layers) == 1
+    L = layers[0]
+    assert L.multiscale
+    assert [tuple(d.shape) for d in L.data] == [(108, 256, 256), (54, 128, 128), (27, 64, 64)]
+    np.testing.assert_allclose(L.scale, (1.5, 0.9570312, 0.9570312), rtol=1e-6)
+    np.testing.assert_allclose(L.translate, (0, 0, 0))
+    lo, hi = L.contrast_limits
+    assert -1024 <= lo < hi <= 2986
+    whole = volvis.open(DATA / "ct_head.nrrd").array
+    from volvis.napari._reader import LevelArray
+    assert isinstance(L.data[0], LevelArray)  # lazy: read by boxes
+    np.testing.assert_array_equal(L.data[0][50], whole[50])
+    np.testing.assert_array_equal(L.data[0][3:90:7, ::-5, 17], whole[3:90:7, ::-5, 17])
+    np.testing.assert_array_equal(np.asarray(L.data[0]), whole)
+    # level 1: 2x2x2 means of level 0 (the .vvb's pyramid), to rounding
+    l1 = np.asarray(L.data[1]).astype(float)
+    means = whole.astype(float).reshape(54, 2, 128, 2, 128, 2).mean(axis=(1, 3, 5))
+    assert np.max(np.abs(l1 - means)) <= 1.0
+
+
+@pytest.mark.parametrize("name,shape,scale", [
+    ("HeadMRVolume.mhd", (42, 62, 48), (4, 4, 4)),
+    ("neghip.slc", (66, 66, 66), (1, 1, 1)),
+    ("ct_head.nrrd", (108, 256, 256), (1.5, 0.9570312, 0.9570312)),
+])
+def test_open_other_formats(make_napari_viewer, plugin, name, shape, scale):
+    v = make_napari_viewer()
+    layers = v.open(str(DATA / name), plugin="volvis")
+    assert len(layers) == 1
+    L = layers[0]
+    assert L.data.shape == shape and not L.multiscale
+    np.testing.assert_allclose(L.scale, scale, rtol=1e-6)
+    np.testing.assert_array_equal(np.asarray(L.data), volvis.open(DATA / name).array)
+
+
+@pytest.mark.parametrize("ext", [".nrrd", ".mha", ".vvb"])
+def test_writer_round_trip(make_napari_viewer, plugin, out_dir, ext):
+    v = make_napari_viewer()
+    arr = volvis.open(DATA / "HeadMRVolume.mhd").array
+    L = v.add_image(arr, scale=(4, 2, 3), translate=(10, -5, 7), name="mr")
+    path = out_dir / ("written" + ext)
+    saved = L.save(str(path), plugin="volvis")
+    assert saved == [str(path)]
+    back = volvis.open(path)
+    np.testing.assert_array_equal(back.array, arr)
+    np.testing.assert_allclose(back.spacing, (3, 2, 4))
+    np.testing.assert_allclose(back.origin, (7, -5, 10))
+
+
+def test_writer_refuses_2d(make_napari_viewer, plugin, out_dir):
+    from volvis.napari._writer import write_image
+    with pytest.raises(volvis.InvalidError, match="3-D"):
+        write_image(str(out_dir / "flat.nrrd"), np.zeros((4, 5), np.uint8), {})
+    assert not (out_dir / "flat.nrrd").exists()
+
+
+def _final(qtbot, w, before):
+    w.request()
+    qtbot.waitUntil(lambda: w.finals > before or w.error is not None, timeout=45000)
+    assert w.error is None, w.error
+    return w.image.copy()
+
+
+def _cli_render(world, view, out_dir, name, volume):
+    """`volvis render` of the widget's World (saved as a scene) at its view,
+    by level of detail 1 pixel a voxel, as napari shows it."""
+    scene = out_dir / (name + ".json")
+    w = world.clone()
+    w.view = view
+    w.save(str(scene), volume_files=[str(volume)])
+    png = out_dir / (name + "_cli.png")
+    size = "%dx%d" % view.size
+    subprocess.run([cli(), "render", str(scene), "--lod", "1", "--size", size, "-o", str(png)],
+                   check=True, capture_output=True)
+    return volvis.read_png(str(png))
+
+
+@pytest.mark.parametrize("rendering", ["mip", "translucent"])
+def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin, ct_vvb,
+                                                out_dir, rendering):
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    L = v.open(str(ct_vvb), plugin="volvis")[0]
+    L.rendering = rendering
+    L.colormap = "inferno"
+    L.gamma = 0.8
+    v.dims.ndisplay = 3
+    viewer_camera(v).angles = (0, 20, 80)
+    w = VolVisWidget(v, max_side=256, debounce_ms=10)
+    v.window.add_dock_widget(w, name="VolVis 3-D")
+    img1 = _final(qtbot, w, 0)
+    f1 = dict(w.frame)
+    volvis.save_png(img1, str(out_dir / ("widget_%s_1.png" % rendering)))
+    ref1 = _cli_render(f1["world"], f1["view"], out_dir, "widget_%s_1" % rendering, ct_vvb)
+    if f1["mirror"]:
+        ref1 = ref1[:, ::-1]
+    p1 = psnr(img1, ref1)
+    assert p1 >= 40, "widget vs volvis render: %.2f dB" % p1
+    assert img1[..., :3].max() > 50, "a black frame"
+    assert sum(f1["lod"]["nodes"]) > 0
+    # turn napari's camera: the widget follows (debounced) and matches again
+    n = w.finals
+    viewer_camera(v).angles = (10, -35, 60)
+    qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+    img2 = w.image.copy()
+    f2 = dict(w.frame)
+    volvis.save_png(img2, str(out_dir / ("widget_%s_2.png" % rendering)))
+    assert psnr(img1, img2) < 30, "the frame did not change with the camera"
+    ref2 = _cli_render(f2["world"], f2["view"], out_dir, "widget_%s_2" % rendering, ct_vvb)
+    if f2["mirror"]:
+        ref2 = ref2[:, ::-1]
+    p2 = psnr(img2, ref2)
+    assert p2 >= 40, "after the turn, widget vs volvis render: %.2f dB" % p2
+    print("PSNR %s: %.2f dB, %.2f dB after the turn" % (rendering, p1, p2))
