@@ -163,3 +163,75 @@ def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin
     p2 = psnr(img2, ref2)
     assert p2 >= 40, "after the turn, widget vs volvis render: %.2f dB" % p2
     print("PSNR %s: %.2f dB, %.2f dB after the turn" % (rendering, p1, p2))
+
+
+def test_camera_mapping_against_napari_canvas(make_napari_viewer, qtbot, plugin, out_dir):
+    """The widget's view of napari's camera against napari's own 3-D canvas
+    (VisPy, OpenGL under Xvfb): MIP of neghip, several camera angles and a
+    perspective one; the widget's frame at the canvas's size must look like
+    the screenshot (the two sample differently: a loose bound), and better
+    than its mirror image (the handedness) and than the previous angle's."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer(show=True)
+    L = v.open(str(DATA / "neghip.slc"), plugin="volvis")[0]
+    L.rendering = "mip"
+    L.contrast_limits = (0, 255)
+    L.interpolation3d = "linear"
+    v.dims.ndisplay = 3
+    w = VolVisWidget(v, max_side=4096, debounce_ms=10)
+    cam = viewer_camera(v)
+    prev = None
+    for n, (angles, persp) in enumerate([((0, 0, 90), 0), ((0, 30, 90), 0),
+                                         ((20, -40, 60), 0), ((15, 25, 80), 30)]):
+        cam.angles = angles
+        cam.perspective = persp
+        shot = v.screenshot(canvas_only=True, flash=False)
+        img = _final(qtbot, w, w.finals)
+        if img.shape[:2] != shot.shape[:2]:
+            pytest.skip("canvas %s vs frame %s: the canvas model's size lags the canvas"
+                        % (shot.shape[:2], img.shape[:2]))
+        volvis.save_png(np.ascontiguousarray(shot[..., :4]), str(out_dir / ("napari_%d.png" % n)))
+        volvis.save_png(img, str(out_dir / ("widget_napari_%d.png" % n)))
+        p = psnr(shot, img)
+        pm = psnr(shot, img[:, ::-1])
+        print("angles %s perspective %s: %.2f dB (mirrored %.2f dB)" % (angles, persp, p, pm))
+        assert p >= 20, "widget vs napari's canvas at %s: %.2f dB" % (angles, p)
+        assert p > pm + 3, "the mirror image fits napari's canvas as well (%.2f, %.2f dB)" % (p, pm)
+        if prev is not None and prev.shape == img.shape:
+            assert p > psnr(shot, prev) + 3
+        prev = img
+
+
+def test_widget_shadows(make_napari_viewer, qtbot, plugin, out_dir):
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    L = v.open(str(DATA / "ct_head.nrrd"), plugin="volvis")[0]  # in memory
+    L.rendering = "iso"
+    L.iso_threshold = 300
+    v.dims.ndisplay = 3
+    viewer_camera(v).angles = (0, 30, 70)
+    w = VolVisWidget(v, max_side=192, debounce_ms=10)
+    plain = _final(qtbot, w, 0)
+    w.shadows.setChecked(True)
+    shadowed = _final(qtbot, w, w.finals)
+    assert w.frame["renderer"] == "raytrace"
+    volvis.save_png(plain, str(out_dir / "widget_iso.png"))
+    volvis.save_png(shadowed, str(out_dir / "widget_iso_shadows.png"))
+    assert psnr(plain, shadowed) < 35
+    # the same silhouette: shadows darken the surface, they do not move it
+    # (the ray tracer and the ray caster find the surface alike, to edge pixels)
+    assert np.mean((plain[..., 3] > 0) != (shadowed[..., 3] > 0)) < 0.01
+    # and it is what volvis render --renderer raytrace draws of the same World
+    f = w.frame
+    scene = out_dir / "widget_iso_shadows.json"
+    world = f["world"].clone()
+    world.view = f["view"]
+    world.save(str(scene), volume_files=[str(DATA / "ct_head.nrrd")])
+    png = out_dir / "widget_iso_shadows_cli.png"
+    subprocess.run([cli(), "render", str(scene), "--renderer", "raytrace", "--size",
+                    "%dx%d" % f["view"].size, "-o", str(png)], check=True, capture_output=True)
+    ref = volvis.read_png(str(png))
+    if f["mirror"]:
+        ref = ref[:, ::-1]
+    p = psnr(shadowed, ref)
+    assert p >= 40, "shadows: widget vs volvis render --renderer raytrace: %.2f dB" % p

@@ -371,6 +371,8 @@ class VolVisWidget(QWidget):
                                           **kw)
             except CancelledError:
                 return None
+            except Error as e:  # the library's one-line message, shown in the status line
+                return dict(error=str(e), generation=gen)
             return dict(pass_=kind, image=img, world=world, view=v, renderer=renderer,
                         mirror=mirror, lod=info, notes=notes, generation=gen,
                         seconds=time.perf_counter() - t0)
@@ -380,6 +382,8 @@ class VolVisWidget(QWidget):
         if f is None or self._stale(gen):
             return
         yield f
+        if "error" in f:
+            return
         if pyramids:
             for _ in range(64):
                 f = frame("progressive", (w, h), progressive=True)
@@ -404,6 +408,9 @@ class VolVisWidget(QWidget):
 
     def _show(self, f):
         if f["generation"] != self._generation:
+            return
+        if "error" in f:
+            self._fail(f["error"])
             return
         img = np.asarray(f["image"])
         if f["mirror"]:
