@@ -235,3 +235,57 @@ def test_widget_shadows(make_napari_viewer, qtbot, plugin, out_dir):
         ref = ref[:, ::-1]
     p = psnr(shadowed, ref)
     assert p >= 40, "shadows: widget vs volvis render --renderer raytrace: %.2f dB" % p
+
+
+@pytest.fixture(scope="session")
+def zarr_pyramid(out_dir):
+    """A 256^3 u8 OME-Zarr pyramid (3 levels, volvis convert's 2x2x2 means)
+    with detail at every scale: a 1-voxel lattice of bright points over
+    smooth shells, so a coarse level is visibly not level 0."""
+    n = 256
+    z, y, x = np.ogrid[:n, :n, :n]
+    r = np.sqrt((x - 127.5) ** 2 + (y - 127.5) ** 2 + (z - 127.5) ** 2)
+    vol = (60 + 40 * np.cos(r / 6.0)).astype(np.float32) * (r < 120)
+    vol[::4, ::4, ::4] = np.where(r[::4, ::4, ::4] < 120, 255, 0)
+    src = out_dir / "lattice.nrrd"
+    volvis.Volume(vol.astype(np.uint8), spacing=(0.5, 0.5, 0.5)).save(str(src))
+    out = out_dir / "lattice.ome.zarr"
+    subprocess.run([cli(), "convert", "-q", str(src), str(out)], check=True)
+    return out
+
+
+def test_widget_level_of_detail(make_napari_viewer, qtbot, plugin, zarr_pyramid, out_dir):
+    """napari's own 3-D view of a multiscale layer draws its coarsest level
+    only; the widget draws level 0 where the view needs it (zoomed in) and
+    coarse levels where it does not (zoomed out), and equals volvis render
+    --lod 1 of the same World and view."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    L = v.open(str(zarr_pyramid), plugin="volvis")[0]
+    assert L.multiscale and [d.shape for d in L.data] == [(256,) * 3, (128,) * 3, (64,) * 3]
+    np.testing.assert_allclose(L.scale, (0.5, 0.5, 0.5))
+    L.rendering = "translucent"
+    L.colormap = "viridis"
+    L.contrast_limits = (90, 255)
+    v.dims.ndisplay = 3
+    cam = viewer_camera(v)
+    cam.angles = (0, 25, 80)
+    w = VolVisWidget(v, max_side=256, debounce_ms=10)
+    base_zoom = cam.zoom
+    cam.zoom = base_zoom / 4
+    far = _final(qtbot, w, w.finals)
+    nodes_far = list(w.frame["lod"]["nodes"])
+    cam.zoom = base_zoom * 3
+    near = _final(qtbot, w, w.finals)
+    f = dict(w.frame)
+    nodes_near = list(f["lod"]["nodes"])
+    volvis.save_png(far, str(out_dir / "widget_lod_far.png"))
+    volvis.save_png(near, str(out_dir / "widget_lod_near.png"))
+    print("nodes per level: zoomed out %s, zoomed in %s" % (nodes_far, nodes_near))
+    assert nodes_far[0] == 0 and sum(nodes_far[1:]) > 0, nodes_far
+    assert nodes_near[0] > 0, nodes_near
+    ref = _cli_render(f["world"], f["view"], out_dir, "widget_lod_near", zarr_pyramid)
+    if f["mirror"]:
+        ref = ref[:, ::-1]
+    p = psnr(near, ref)
+    assert p >= 40, "LOD frame vs volvis render --lod 1: %.2f dB" % p
