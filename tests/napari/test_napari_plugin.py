@@ -289,3 +289,54 @@ def test_widget_level_of_detail(make_napari_viewer, qtbot, plugin, zarr_pyramid,
         ref = ref[:, ::-1]
     p = psnr(near, ref)
     assert p >= 40, "LOD frame vs volvis render --lod 1: %.2f dB" % p
+
+
+@pytest.fixture(scope="session")
+def dicom_folder(out_dir):
+    """A CT series written by pydicom (an independent writer): 12 slices of
+    40x48 u16, one file a slice, 0.8 mm pixels, 2.5 mm apart; the folder's
+    name says nothing of DICOM."""
+    pydicom = pytest.importorskip("pydicom")
+    from pydicom.dataset import FileDataset, FileMetaDataset
+    from pydicom.uid import ExplicitVRLittleEndian, generate_uid
+    folder = out_dir / "ct_series"
+    folder.mkdir(exist_ok=True)
+    for f in folder.iterdir():
+        f.unlink()
+    rng = np.random.default_rng(3)
+    zyx = rng.integers(0, 4000, size=(12, 40, 48)).astype(np.uint16)
+    ct = "1.2.840.10008.5.1.4.1.1.2"
+    series, study, frame = generate_uid(), generate_uid(), generate_uid()
+    for z in rng.permutation(12):
+        meta = FileMetaDataset()
+        meta.MediaStorageSOPClassUID = ct
+        meta.MediaStorageSOPInstanceUID = generate_uid()
+        meta.TransferSyntaxUID = ExplicitVRLittleEndian
+        path = folder / ("slice%02d" % z)
+        ds = FileDataset(str(path), {}, file_meta=meta, preamble=b"\0" * 128)
+        ds.SOPClassUID, ds.SOPInstanceUID = ct, meta.MediaStorageSOPInstanceUID
+        ds.StudyInstanceUID, ds.SeriesInstanceUID = study, series
+        ds.FrameOfReferenceUID, ds.Modality, ds.SeriesNumber = frame, "CT", 2
+        ds.InstanceNumber = int(z) + 1
+        ds.ImageOrientationPatient = ["1", "0", "0", "0", "1", "0"]
+        ds.ImagePositionPatient = ["-20", "-16", "%.1f" % (10 + 2.5 * z)]
+        ds.PixelSpacing = ["0.8", "0.8"]
+        ds.SliceThickness = "2.5"
+        ds.SamplesPerPixel, ds.PhotometricInterpretation = 1, "MONOCHROME2"
+        ds.Rows, ds.Columns = 40, 48
+        ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 16, 15, 0
+        ds.PixelData = zyx[z].tobytes()
+        ds.save_as(str(path), enforce_file_format=True)
+    return folder, zyx
+
+
+def test_open_dicom_folder(make_napari_viewer, plugin, dicom_folder):
+    folder, zyx = dicom_folder
+    v = make_napari_viewer()
+    L = v.open(str(folder), plugin="volvis")[0]
+    assert L.data.shape == zyx.shape
+    np.testing.assert_allclose(L.scale, (2.5, 0.8, 0.8), rtol=1e-5)
+    vol = volvis.open(folder)
+    np.testing.assert_allclose(L.translate, vol.origin[::-1])
+    np.testing.assert_array_equal(np.asarray(L.data), vol.array)
+    np.testing.assert_array_equal(np.asarray(L.data), zyx)  # the voxels pydicom wrote

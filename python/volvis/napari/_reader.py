@@ -18,7 +18,9 @@ the library's automatic window (vv_slice_auto_window on the coarsest level
 or the whole volume: the 1st to 99.5th percentile of the foreground),
 scale the voxel spacing and translate the origin of voxel (0, 0, 0), both
 in napari's (z, y, x) order. Time step 0 only; the direction matrix (an
-oblique volume) is not passed (napari's ``affine`` would take it).
+oblique or flipped volume, e.g. a DICOM series in the library's RAS frame)
+is not applied, only kept in ``metadata["volvis"]["direction"]`` (the
+columns of i, j, k in x, y, z).
 """
 import os
 
@@ -207,17 +209,20 @@ def layer_data(path):
             data = [LevelArray(pyr, L) for L in range(len(levels))]
             spacing, origin = levels[0].spacing, levels[0].origin
             contrast = auto_contrast(pyr.proxy())
+            direction = np.asarray(pyr.proxy().direction)
         else:
             data = [vol.array]
             spacing, origin = vol.spacing, vol.origin
             contrast = auto_contrast(vol)
+            direction = np.asarray(vol.direction)
         name = info["channel_name"] or (base if n == 1 else "%s [%d]" % (base, c))
         kw = {"name": name, "scale": tuple(float(s) for s in spacing[::-1]),
               "translate": tuple(float(o) for o in origin[::-1]),
               "metadata": {"volvis": {"path": path, "channel": c, "n_channels": n,
                                       "n_times": info["n_times"],
                                       "out_of_core": pyr is not None,
-                                      "kind": pyr.kind if pyr is not None else "whole"}}}
+                                      "kind": pyr.kind if pyr is not None else "whole",
+                                      "direction": direction.tolist()}}}
         if len(data) > 1:
             kw["multiscale"] = True
         else:
