@@ -340,3 +340,49 @@ def test_open_dicom_folder(make_napari_viewer, plugin, dicom_folder):
     np.testing.assert_allclose(L.translate, vol.origin[::-1])
     np.testing.assert_array_equal(np.asarray(L.data), vol.array)
     np.testing.assert_array_equal(np.asarray(L.data), zyx)  # the voxels pydicom wrote
+
+
+def test_open_ome_zarr_channels(make_napari_viewer, plugin, out_dir):
+    """Two channels of an OME-Zarr 0.4 store written by ngff-zarr (an
+    independent writer) with omero names and colours: one lazy multiscale
+    layer each, named and coloured by the file, with its scale and
+    translation."""
+    nz = pytest.importorskip("ngff_zarr")
+    rng = np.random.default_rng(1)
+    a = rng.integers(0, 1000, size=(2, 32, 40, 48)).astype(np.uint16)
+    img = nz.to_ngff_image(a, dims=["c", "z", "y", "x"], scale={"z": 2.0, "y": 0.5, "x": 0.5},
+                           translation={"z": 1.0, "y": 2.0, "x": 3.0})
+    ms = nz.to_multiscales(img, scale_factors=[2])
+    ms.metadata.omero = nz.Omero(channels=[
+        nz.OmeroChannel(color="FF0000", window=nz.OmeroWindow(min=0, max=1000, start=10, end=900),
+                        label="DAPI"),
+        nz.OmeroChannel(color="00FF00", window=nz.OmeroWindow(min=0, max=1000, start=20, end=800),
+                        label="GFP")])
+    store = out_dir / "channels.ome.zarr"
+    nz.to_ngff_zarr(str(store), ms, version="0.4")
+    v = make_napari_viewer()
+    layers = v.open(str(store), plugin="volvis")
+    assert [L.name for L in layers] == ["DAPI", "GFP"]
+    for c, (L, rgb) in enumerate(zip(layers, [(1, 0, 0), (0, 1, 0)])):
+        assert L.multiscale and len(L.data) == 2
+        assert L.data[0].shape == (32, 40, 48)
+        np.testing.assert_allclose(L.scale, (2, 0.5, 0.5))
+        np.testing.assert_allclose(L.translate, (1, 2, 3))
+        np.testing.assert_array_equal(np.asarray(L.data[0]), a[c])
+        np.testing.assert_allclose(L.colormap.map(np.array([1.0]))[0][:3], rgb, atol=1e-6)
+        np.testing.assert_allclose(L.colormap.map(np.array([0.0]))[0][:3], (0, 0, 0), atol=1e-6)
+        assert L.blending == "additive"
+
+
+def test_widget_closed_stops_following(make_napari_viewer, qtbot, plugin):
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    v.open(str(DATA / "neghip.slc"), plugin="volvis")
+    v.dims.ndisplay = 3
+    w = VolVisWidget(v, max_side=64, debounce_ms=10)
+    _final(qtbot, w, 0)
+    w.close()
+    n = w.frames
+    viewer_camera(v).angles = (0, 40, 90)
+    qtbot.wait(300)
+    assert w.frames == n

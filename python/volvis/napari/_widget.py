@@ -265,7 +265,24 @@ class VolVisWidget(QWidget):
             self._changed()
 
     def _changed(self, *args):
-        self._timer.start()
+        try:
+            self._timer.start()
+        except RuntimeError:  # the Qt widget was deleted: stop listening
+            self._disconnect()
+
+    def _disconnect(self):
+        v = self.viewer
+        pairs = [(viewer_camera(v).events, self._camera_changed),
+                 (v.dims.events.ndisplay, self._changed),
+                 (v.layers.events.inserted, self._layers_changed),
+                 (v.layers.events.removed, self._layers_changed),
+                 (v.layers.events.moved, self._changed)]
+        pairs += [(layer.events, self._layer_event) for layer in v.layers]
+        for emitter, cb in pairs:
+            try:
+                emitter.disconnect(cb)
+            except (RuntimeError, ValueError, TypeError):
+                pass
 
     # ---- rendering
     def _canvas_hw(self):
@@ -447,4 +464,7 @@ class VolVisWidget(QWidget):
         self._generation += 1
         if self._worker is not None:
             self._worker.quit()
+        self._timer.stop()
+        self._disconnect()
+        self._hooked.clear()
         super().closeEvent(event)
