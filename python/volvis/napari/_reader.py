@@ -6,7 +6,8 @@ A file the library reads out of core -- a pyramid (OME-Zarr, BigDataViewer
 HDF5 or XML, Imaris, a .vvb with levels) by its chunks, a bricked file (a
 .vvb without levels, a raw-encoded NRRD) by its bricks -- becomes a LAZY
 layer: one :class:`LevelArray` per level (finest first, ``multiscale=True``
-when there are several), each reading only the boxes napari asks for,
+when there are several), wrapped in a dask array (:func:`lazy`), each
+reading only the boxes napari's slices meet,
 through the process's one cache (volvis.memory_limit). Any other file
 (compressed NRRD, MetaImage, SLC, VTK, DICOM series, ...) is read whole by
 its library reader, as the library always reads it.
@@ -32,7 +33,7 @@ from ..errors import Error
 from ..pyramid import Pyramid
 from ..volume import Volume
 
-__all__ = ["get_reader", "read", "LevelArray", "EXTENSIONS"]
+__all__ = ["get_reader", "read", "LevelArray", "lazy", "level_array", "EXTENSIONS"]
 
 #: file names the reader takes (napari.yaml lists the same patterns)
 EXTENSIONS = (".vvb", ".xml", ".h5", ".ims", ".dcm", ".slc", ".nrrd", ".nhdr", ".mha", ".mhd",
@@ -106,6 +107,35 @@ class LevelArray:
     def __repr__(self):
         return "<volvis LevelArray %s level %d of %r, shape %s %s>" % (
             self.pyramid.kind, self.level, self.pyramid.path, self.shape, self.dtype)
+
+
+def lazy(level_array):
+    """A LevelArray as napari gets it: a dask array over it (napari indexes
+    a multiscale level with every non-displayed axis whole and only then
+    picks the slice, which with a dask array reads nothing until the slice
+    is computed: then only the chunks that meet it), each dask chunk read
+    by LevelArray.__getitem__; ``volvis_level`` is the LevelArray. Without
+    dask, the LevelArray itself."""
+    try:
+        import dask.array as da
+    except ImportError:
+        return level_array
+    z, y, x = level_array.shape
+    arr = da.from_array(level_array, chunks=(min(z, 64), min(y, 256), min(x, 256)),
+                        asarray=False, fancy=False, lock=False,
+                        meta=np.empty((0, 0, 0), dtype=level_array.dtype),
+                        name="volvis-%s-%d-%x" % (os.path.basename(level_array.pyramid.path),
+                                                  level_array.level, id(level_array)))
+    arr.volvis_level = level_array
+    return arr
+
+
+def level_array(data):
+    """The LevelArray behind a layer's array (lazy() or itself), or None."""
+    if isinstance(data, LevelArray):
+        return data
+    la = getattr(data, "volvis_level", None)
+    return la if isinstance(la, LevelArray) else None
 
 
 def _is_dicom_file(path):
@@ -206,7 +236,7 @@ def layer_data(path):
         pyr, vol, info = first if c == 0 else _open(path, c)
         if pyr is not None:
             levels = pyr.levels
-            data = [LevelArray(pyr, L) for L in range(len(levels))]
+            data = [lazy(LevelArray(pyr, L)) for L in range(len(levels))]
             spacing, origin = levels[0].spacing, levels[0].origin
             contrast = auto_contrast(pyr.proxy())
             direction = np.asarray(pyr.proxy().direction)

@@ -56,7 +56,7 @@ from qtpy.QtWidgets import (QCheckBox, QHBoxLayout, QLabel, QPushButton, QSizePo
 import volvis
 from ..errors import CancelledError, Error
 from ..volume import VOXEL_TYPES
-from ._reader import LevelArray
+from ._reader import level_array
 
 __all__ = ["VolVisWidget", "napari_view", "layer_object"]
 
@@ -145,8 +145,9 @@ def layer_object(layer, cache=None):
     scale = np.asarray(layer.scale, dtype=float)[-3:][::-1]
     translate = np.asarray(layer.translate, dtype=float)[-3:][::-1]
     pyr = None
-    if isinstance(data, LevelArray):
-        pyr = data.pyramid
+    la = level_array(data)
+    if la is not None:
+        pyr = la.pyramid
         obj = pyr.object(name=layer.name[:60])
         lv = pyr.levels[0]
         sp, org = np.asarray(lv.spacing, dtype=float), np.asarray(lv.origin, dtype=float)
@@ -187,7 +188,8 @@ class VolVisWidget(QWidget):
     4) uint8 RGBA, as napari's canvas would show it), ``frame`` a dict of
     it (pass "coarse", "progressive" or "final"; world, view, renderer,
     mirror, lod (nodes drawn per level, pending, stalled), seconds since
-    the request, generation), ``frames`` and ``finals`` counters, ``error``
+    the request, generation), ``frames`` and ``finals`` counters, ``passes``
+    the (generation, pass, nodes pending) of the latest request's frames, ``error``
     the last error's message or None. ``max_side`` caps the frame's longer
     side (the canvas's aspect is kept), ``lod`` the pixels a voxel may
     cover, ``debounce_ms`` the wait after a change. Methods:
@@ -202,6 +204,7 @@ class VolVisWidget(QWidget):
         self.frame = None
         self.frames = 0
         self.finals = 0
+        self.passes = []  # (generation, pass, pending) of the request's frames shown
         self.error = None
         self._generation = 0
         self._worker = None
@@ -436,6 +439,9 @@ class VolVisWidget(QWidget):
         self.image = img
         self.frame = dict(f)
         self.frame["pass"] = self.frame.pop("pass_")
+        if self.passes and self.passes[-1][0] != f["generation"]:
+            self.passes = []
+        self.passes.append((f["generation"], self.frame["pass"], f["lod"]["pending"]))
         self.frames += 1
         if self.frame["pass"] == "final":
             self.finals += 1
