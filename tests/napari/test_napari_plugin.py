@@ -399,3 +399,17 @@ def test_widget_closed_stops_following(make_napari_viewer, qtbot, plugin):
     viewer_camera(v).angles = (0, 40, 90)
     qtbot.wait(300)
     assert w.frames == n
+
+
+def test_reader_declines_and_fails_cleanly(make_napari_viewer, plugin, out_dir):
+    from volvis.napari._reader import get_reader, read
+    other = out_dir / "other.xml"
+    other.write_text("<?xml version='1.0'?><svg/>")
+    assert get_reader(str(other)) is None  # not BigDataViewer's: left to others
+    assert get_reader(str(out_dir / "x.png")) is None
+    bad = out_dir / "bad.nrrd"
+    bad.write_bytes(b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4\n\n")
+    with pytest.raises(volvis.Error) as e:
+        read(str(bad))
+    msg = str(e.value)
+    assert "bad.nrrd" in msg and "\n" not in msg.strip(), msg

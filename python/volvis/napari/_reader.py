@@ -163,6 +163,12 @@ def _accepts(path):
         return any(_is_dicom_file(os.path.join(p, n)) for n in names)
     if low.endswith(".nii.gz"):
         return False
+    if low.endswith(".xml"):  # BigDataViewer's dataset XML only
+        try:
+            with open(p, "rb") as f:
+                return b"<SpimData" in f.read(4096)
+        except OSError:
+            return False
     return low.endswith(EXTENSIONS) or (not os.path.splitext(low)[1] and _is_dicom_file(p))
 
 
