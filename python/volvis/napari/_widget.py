@@ -37,10 +37,12 @@ What it maps (napari -> VolVis, each layer one volume object of a World):
 Frames: a change (camera, layers, their properties) re-renders after a
 short debounce, on a worker thread, newest request wins (an older render
 is cancelled at its next progress report and its frames dropped):
-first a quarter-size frame from what is in memory, then full size,
-progressively (what the cache holds, while the background loader reads
-what the view needs), then, if the view needs more than the cache held,
-a frame that streams the rest. Shadows: the ``raytrace`` renderer with a
+first a quarter-size frame from what is in memory, then half-size frames
+of the full-size frame's nodes, progressively (what the cache holds, while
+the background loader reads what the view needs; a new frame after at
+least twice the last one's render time, or when the loader is idle; at
+most ``progressive_frames`` (4) started within ``progressive_s`` (2 s)),
+then the full-size frame, which reads what is still missing. Shadows: the ``raytrace`` renderer with a
 directional light from above the camera's left shoulder, every object
 casting and receiving shadows.
 """
@@ -200,6 +202,12 @@ class VolVisWidget(QWidget):
         self.viewer = napari_viewer
         self.max_side = int(max_side)
         self.lod = float(lod)
+        # progressive half-size frames while the loader reads: at most this
+        # many, started within this many seconds; then the full-size frame
+        # reads what is missing itself (by the render's parallel reads,
+        # faster than the one background loader)
+        self.progressive_frames = 4
+        self.progressive_s = 2.0
         self.image = None
         self.frame = None
         self.frames = 0
@@ -381,14 +389,14 @@ class VolVisWidget(QWidget):
         t0 = time.perf_counter()
         w, h = view.size
         cancel = (lambda fraction: self._stale(gen))
-        common = dict(renderer=renderer, progress=cancel, lod=self.lod)
+        common = dict(renderer=renderer, progress=cancel)
 
-        def frame(kind, size, **kw):
+        def frame(kind, size, lod=None, **kw):
             v = view.copy()
             v.size = size
             try:
-                img, info = volvis.render(world, view=v, size=size, return_lod=True, **common,
-                                          **kw)
+                img, info = volvis.render(world, view=v, size=size, return_lod=True,
+                                          lod=self.lod if lod is None else lod, **common, **kw)
             except CancelledError:
                 return None
             except Error as e:  # the library's one-line message, shown in the status line
@@ -398,6 +406,7 @@ class VolVisWidget(QWidget):
                         seconds=time.perf_counter() - t0)
 
         small = (max(1, w // 4), max(1, h // 4))
+        half = (max(1, w // 2), max(1, h // 2))
         f = frame("coarse", small, progressive=bool(pyramids))
         if f is None or self._stale(gen):
             return
@@ -405,20 +414,33 @@ class VolVisWidget(QWidget):
         if "error" in f:
             return
         if pyramids:
-            for _ in range(64):
-                f = frame("progressive", (w, h), progressive=True)
+            t_prog = time.perf_counter()
+            for _ in range(self.progressive_frames):
+                if time.perf_counter() - t_prog > self.progressive_s:
+                    break  # the full-size frame reads the rest, in parallel
+                t_frame = time.perf_counter()
+                # half size, the nodes of the full-size frame (lod halved):
+                # a quarter of the cost while the loader reads them
+                f = frame("progressive", half, lod=0.5 * self.lod, progressive=True)
                 if f is None or self._stale(gen):
                     return
-                if not f["lod"]["pending"] or f["lod"]["stalled"]:
+                if "error" in f or not f["lod"]["pending"] or f["lod"]["stalled"]:
                     break
                 yield f
-                for p in pyramids:
-                    p.wait(0.25)
-            if f["lod"]["pending"]:
-                f = frame("final", (w, h))
-                if f is None or self._stale(gen):
-                    return
-            f["pass_"] = "final"
+                # let the loader work: the next frame after at least twice
+                # this one's render time (and 0.5 s), or when it is idle, so
+                # that redrawing costs at most a third of the time
+                t_next = time.perf_counter() + max(0.5, 2 * (time.perf_counter() - t_frame))
+                while time.perf_counter() < t_next and not self._stale(gen) and \
+                        any(p.loading for p in pyramids):
+                    for p in pyramids:
+                        p.wait(0.1)
+            if "error" in f:
+                yield f
+                return
+            f = frame("final", (w, h))  # streams what is still missing
+            if f is None or self._stale(gen):
+                return
             yield f
         else:
             f = frame("final", (w, h))
