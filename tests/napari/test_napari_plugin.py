@@ -413,3 +413,34 @@ def test_reader_declines_and_fails_cleanly(make_napari_viewer, plugin, out_dir):
         read(str(bad))
     msg = str(e.value)
     assert "bad.nrrd" in msg and "\n" not in msg.strip(), msg
+
+
+@pytest.fixture(scope="session")
+def hdf5_files(out_dir):
+    """A BigDataViewer HDF5 file (two setups) and an Imaris file, 3 levels
+    each, written by h5py (Debian's python3, tests/napari/make_hdf5.py)."""
+    d = out_dir / "hdf5"
+    d.mkdir(exist_ok=True)
+    r = subprocess.run(["/usr/bin/python3", str(pathlib.Path(__file__).parent / "make_hdf5.py"),
+                        str(d)], capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip("h5py (python3-h5py) could not write the files: " + r.stderr.strip()[-300:])
+    return d
+
+
+def test_open_bigdataviewer_and_imaris(make_napari_viewer, plugin, hdf5_files):
+    from volvis.napari._reader import level_array
+    v = make_napari_viewer()
+    layers = v.open(str(hdf5_files / "bdv.h5"), plugin="volvis")
+    assert len(layers) == 2  # one a setup
+    for s, L in enumerate(layers):
+        assert L.multiscale and len(L.data) == 3
+        assert level_array(L.data[0]) is not None
+        for k in range(3):
+            np.testing.assert_array_equal(np.asarray(L.data[k]),
+                                          np.load(hdf5_files / ("bdv_s%d_l%d.npy" % (s, k))))
+    L = v.open(str(hdf5_files / "cells.ims"), plugin="volvis")[0]
+    assert L.multiscale and [d.shape for d in L.data] == [(36, 44, 52), (18, 22, 26), (9, 11, 13)]
+    np.testing.assert_allclose(L.scale, (2.0, 0.5, 0.25), rtol=1e-5)
+    for k in range(3):  # Imaris's padding to 32 cut off
+        np.testing.assert_array_equal(np.asarray(L.data[k]), np.load(hdf5_files / ("ims_l%d.npy" % k)))
