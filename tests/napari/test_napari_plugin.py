@@ -456,3 +456,36 @@ def test_open_bigdataviewer_and_imaris(make_napari_viewer, plugin, hdf5_files):
     np.testing.assert_allclose(L.scale, (2.0, 0.5, 0.25), rtol=1e-5)
     for k in range(3):  # Imaris's padding to 32 cut off
         np.testing.assert_array_equal(np.asarray(L.data[k]), np.load(hdf5_files / ("ims_l%d.npy" % k)))
+
+
+@pytest.mark.parametrize("rendering,mode", [("translucent", "composite"), ("mip", "mip"),
+                                            ("minip", "minip"), ("average", "xray"),
+                                            ("iso", "iso"), ("attenuated_mip", "mip")])
+def test_layer_transfer_function(make_napari_viewer, rendering, mode):
+    """The layer's colormap, contrast limits, gamma and opacity as the
+    transfer function evaluates them (vv_tf_eval_*), at data values between
+    the points of its table and outside the limits."""
+    from volvis.napari._widget import layer_object
+    v = make_napari_viewer()
+    L = v.add_image(np.zeros((4, 5, 6), np.uint16), colormap="magma", contrast_limits=(100, 900),
+                    gamma=0.6, opacity=0.7, rendering=rendering, iso_threshold=500)
+    obj, pyr, note = layer_object(L)
+    assert pyr is None and obj.mode == mode
+    assert bool(note) == (rendering == "attenuated_mip")
+    pts = (obj.tf.color[:, 0] - 100) / 800
+    assert len(pts) == len(obj.tf.opacity) <= 130
+    t = 0.5 * (pts[1:] + pts[:-1])  # midway between the table's points
+    values = 100 + 800 * t
+    got = obj.tf(values)
+    want = L.colormap.map(t ** 0.6)[:, :3]
+    # linear between the points: within the curvature of colormap(t^gamma)
+    assert np.max(np.abs(got[:, :3] - want)) < 0.01
+    want_a = 0.7 * t ** 0.6 if mode == "composite" else np.full_like(t, 0.7)
+    assert np.max(np.abs(got[:, 3] - want_a)) < 0.01
+    below, above = obj.tf([0, 5000])
+    np.testing.assert_allclose(below[:3], L.colormap.map(np.array([0.0]))[0][:3], atol=1e-6)
+    np.testing.assert_allclose(above[:3], L.colormap.map(np.array([1.0]))[0][:3], atol=1e-6)
+    if mode == "iso":
+        assert obj.isovalue == 500
+        np.testing.assert_allclose(obj.material.color,
+                                   L.colormap.map(np.array([0.5 ** 0.6]))[0][:3], atol=1e-6)

@@ -16,8 +16,8 @@ What it maps (napari -> VolVis, each layer one volume object of a World):
   ``iso_threshold`` (shaded, in the colormap's colour at the threshold),
   attenuated_mip -> mip (VolVis has no attenuated MIP: said in the status
   line), additive -> composite.
-- colormap, contrast limits, gamma, opacity: a transfer function of 33
-  points over the contrast limits, colour ``colormap((t)^gamma)`` at data
+- colormap, contrast limits, gamma, opacity: a transfer function of up to
+  130 points over the contrast limits (even in t and in t^gamma), colour ``colormap((t)^gamma)`` at data
   value ``lo + t (hi - lo)``; opacity there ``opacity * t^gamma`` per voxel
   (the smallest spacing) in composite, ``opacity`` in mip, minip and xray.
 - blending: VolVis's own: composite and iso objects are composited along
@@ -122,7 +122,10 @@ def layer_tf(layer, unit_distance):
     mode = _MODES.get(rendering, "composite")
     gamma = float(layer.gamma)
     opacity = float(layer.opacity)
-    t = np.linspace(0.0, 1.0, 33)
+    # points even in t and even in t^gamma (the colormap's argument, steep
+    # near 0 for gamma < 1), at most 130 of the table's 256
+    t = np.unique(np.concatenate([np.linspace(0.0, 1.0, 65),
+                                  np.linspace(0.0, 1.0, 65) ** (1.0 / max(gamma, 1e-3))]))
     rgba = np.asarray(layer.colormap.map(t ** gamma), dtype=float)
     values = lo + t * (hi - lo)
     if mode == "composite":
