@@ -489,3 +489,54 @@ def test_layer_transfer_function(make_napari_viewer, rendering, mode):
         assert obj.isovalue == 500
         np.testing.assert_allclose(obj.material.color,
                                    L.colormap.map(np.array([0.5 ** 0.6]))[0][:3], atol=1e-6)
+
+
+def test_widget_two_layers_and_visibility(make_napari_viewer, qtbot, plugin, out_dir):
+    """Two visible layers are two objects of one World (MIP in green and
+    magenta, combined by the maximum); hiding one re-renders (the widget
+    follows the layers' events) and matches volvis render again."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    a = v.open(str(DATA / "neghip.slc"), plugin="volvis")[0]
+    b = v.open(str(DATA / "ironProt.vtk"), plugin="volvis")[0]
+    for L, cmap in ((a, "green"), (b, "magenta")):
+        L.rendering = "mip"
+        L.colormap = cmap
+        L.contrast_limits = (0, 255)
+    b.translate = (0, 0, 80)
+    v.dims.ndisplay = 3
+    v.reset_view()
+    viewer_camera(v).angles = (0, 20, 75)
+    w = VolVisWidget(v, max_side=192, debounce_ms=10)
+    both = _final(qtbot, w, 0)
+    f = dict(w.frame)
+    assert len(f["world"].objects) == 2
+    ref = _cli_render_files(f, out_dir, "two_layers",
+                            [DATA / "neghip.slc", DATA / "ironProt.vtk"])
+    assert psnr(both, ref) >= 40
+    g, m = both[..., 1].astype(int), both[..., 0].astype(int)
+    assert (g > m + 50).any() and (m > g + 50).any(), "both layers' colours"
+    n = w.finals
+    b.visible = False
+    qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+    one = w.image.copy()
+    f = dict(w.frame)
+    assert len(f["world"].objects) == 1
+    assert psnr(both, one) < 30
+    assert not (one[..., 0].astype(int) > one[..., 1].astype(int) + 50).any()  # no magenta
+    ref = _cli_render_files(f, out_dir, "one_layer", [DATA / "neghip.slc"])
+    assert psnr(one, ref) >= 40
+    volvis.save_png(both, str(out_dir / "widget_two_layers.png"))
+    volvis.save_png(one, str(out_dir / "widget_one_layer.png"))
+
+
+def _cli_render_files(f, out_dir, name, files):
+    scene = out_dir / (name + ".json")
+    w = f["world"].clone()
+    w.view = f["view"]
+    w.save(str(scene), volume_files=[str(p) for p in files])
+    png = out_dir / (name + "_cli.png")
+    subprocess.run([cli(), "render", str(scene), "--size", "%dx%d" % f["view"].size,
+                    "-o", str(png)], check=True, capture_output=True)
+    ref = volvis.read_png(str(png))
+    return ref[:, ::-1] if f["mirror"] else ref
