@@ -18,7 +18,9 @@
 #   test and bench also make .venv at the repository root: a virtual environment with the
 #          PyPI packages of scripts/requirements-pypi.txt, pinned (zarr 3, tensorstore, ome-zarr,
 #          ngff-zarr, ome-zarr-models: Zarr v3 / OME-Zarr 0.5 writers and readers to check ours
-#          against); remade when that file changes. Never installs into the system Python.
+#          against; napari with PyQt5, pytest-qt for the napari plug-in under Xvfb, with Qt's
+#          xcb libraries from Debian); remade when that file changes. Never installs into the
+#          system Python.
 #   test also makes .venv-wheel: scikit-build-core, cffi, numpy, pytest and auditwheel of
 #          scripts/requirements-wheel.txt, pinned, with their wheels in .venv-wheel/wheelhouse
 #          (the pip wheel's test, test_python_wheel, builds and installs offline from them)
@@ -39,7 +41,9 @@ for what in "$@"; do
     demo) pkgs+=(mricron-data) ;;
     test) pkgs+=(libcmocka-dev openssl chromium chromium-driver python3-selenium python3-websockets ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-h5py python3-vtk9 libgdcm-tools python3-scipy teem-apps
                  python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert
-                 mesa-vulkan-drivers vulkan-validationlayers graphviz python3-venv)
+                 mesa-vulkan-drivers vulkan-validationlayers graphviz python3-venv
+                 libgl1-mesa-dri libegl1 libxkbcommon-x11-0 libxcb-icccm4 libxcb-image0 libxcb-keysyms1
+                 libxcb-randr0 libxcb-render-util0 libxcb-xinerama0 libxcb-xkb1 libxcb-cursor0 libxcb-shape0)
           venv=1 wheelvenv=1 ;;
     fuzz) pkgs+=(clang-14 libclang-rt-14-dev libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers python3-venv)

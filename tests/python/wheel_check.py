@@ -11,7 +11,8 @@ read back through the sandboxed reader (volvis-reader of the wheel: with
 VOLVIS_READER naming a missing program the same read fails, so the read did
 go through the reader); the `volvis` command of the environment prints its
 help, renders both files to PNGs and serves the browser client's page from
-the wheel (`volvis serve`).
+the wheel (`volvis serve`); the napari plug-in's entry point (group
+napari.manifest) names its npe2 manifest, which the wheel holds.
 """
 import os
 import pathlib
@@ -110,6 +111,21 @@ def main():
         srv.terminate()
         srv.wait(timeout=10)
     print("volvis serve: the browser client's page served from the wheel")
+    # the napari plug-in: napari finds it by the entry point of group
+    # napari.manifest naming the npe2 manifest inside the package
+    import importlib.metadata
+    import importlib.resources
+    eps = [e for e in importlib.metadata.entry_points(group="napari.manifest")
+           if e.name == "volvis"]
+    if len(eps) != 1 or eps[0].value != "volvis.napari:napari.yaml":
+        fail("napari.manifest entry point: %r" % (eps,))
+    mf = importlib.resources.files("volvis.napari").joinpath("napari.yaml")
+    if not mf.is_file() or "volvis.napari._widget:VolVisWidget" not in mf.read_text():
+        fail("the napari manifest %s is missing or not the plug-in's" % mf)
+    for mod in ("_reader", "_writer", "_widget"):
+        if not importlib.resources.files("volvis.napari").joinpath(mod + ".py").is_file():
+            fail("volvis/napari/%s.py is not in the wheel" % mod)
+    print("napari: the entry point names %s" % mf)
     print("wheel_check: ok")
 
 

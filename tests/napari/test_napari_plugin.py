@@ -1,0 +1,542 @@
+"""The napari plug-in (python/volvis/napari, docs/python.md "napari") with
+napari from PyPI under Xvfb: the manifest, the reader's layers, the writer's
+round trip, and the "VolVis 3-D" dock widget against `volvis render` of
+the same World and view, before and after a camera change."""
+import math
+import pathlib
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+
+import volvis
+from conftest import DATA, ROOT, cli
+
+
+def psnr(a, b):
+    a = np.asarray(a, dtype=np.float64)[..., :3]
+    b = np.asarray(b, dtype=np.float64)[..., :3]
+    assert a.shape == b.shape, (a.shape, b.shape)
+    mse = np.mean((a - b) ** 2)
+    return math.inf if mse == 0 else 10 * math.log10(255.0 ** 2 / mse)
+
+
+def test_manifest_valid_and_found(plugin, ct_vvb):
+    import npe2
+    from volvis.napari import MANIFEST
+    # npe2's own validation (the CLI `npe2 validate` on the file)
+    r = subprocess.run([sys.executable, "-m", "npe2", "validate", MANIFEST],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    mf = npe2.PluginManifest.from_file(MANIFEST)
+    assert mf.name == "volvis"
+    assert [w.display_name for w in mf.contributions.widgets] == ["VolVis 3-D"]
+    readers = [rd.plugin_name for rd in plugin.iter_compatible_readers([str(ct_vvb)])]
+    assert "volvis" in readers
+    assert any(w.plugin_name == "volvis" for w in
+               plugin.iter_compatible_writers(["image"])), "no volvis writer for image layers"
+    # the wheel's entry point names this manifest
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    ep = meta["project"]["entry-points"]["napari.manifest"]["volvis"]
+    mod, res = ep.split(":")
+    assert mod == "volvis.napari" and res == "napari.yaml"
+    import importlib.resources
+    assert importlib.resources.files(mod).joinpath(res).is_file()
+
+
+def test_open_vvb_lazy_multiscale(make_napari_viewer, plugin, ct_vvb):
+    v = make_napari_viewer()
+    layers = v.open(str(ct_vvb), plugin="volvis")
+    assert len(layers) == 1
+    L = layers[0]
+    assert L.multiscale
+    assert [tuple(d.shape) for d in L.data] == [(108, 256, 256), (54, 128, 128), (27, 64, 64)]
+    np.testing.assert_allclose(L.scale, (1.5, 0.9570312, 0.9570312), rtol=1e-6)
+    np.testing.assert_allclose(L.translate, (0, 0, 0))
+    lo, hi = L.contrast_limits
+    assert -1024 <= lo < hi <= 2986
+    whole = volvis.open(DATA / "ct_head.nrrd").array
+    from volvis.napari._reader import level_array
+    assert level_array(L.data[0]) is not None  # lazy: read by boxes
+    pyr = level_array(L.data[0]).pyramid
+    # napari's 2-D view read only the chunks its slice meets, not level 0
+    assert 0 < pyr.stats["bytes_read"] < whole.nbytes / 2, pyr.stats
+    np.testing.assert_array_equal(np.asarray(L.data[0][50]), whole[50])
+    la = level_array(L.data[0])
+    np.testing.assert_array_equal(la[3:90:7, ::-5, 17], whole[3:90:7, ::-5, 17])
+    np.testing.assert_array_equal(la[-1, 4, ...], whole[-1, 4])
+    np.testing.assert_array_equal(np.asarray(L.data[0]), whole)
+    # level 1: 2x2x2 means of level 0 (the .vvb's pyramid), to rounding
+    l1 = np.asarray(L.data[1]).astype(float)
+    means = whole.astype(float).reshape(54, 2, 128, 2, 128, 2).mean(axis=(1, 3, 5))
+    assert np.max(np.abs(l1 - means)) <= 1.0
+
+
+@pytest.mark.parametrize("name,shape,scale", [
+    ("HeadMRVolume.mhd", (42, 62, 48), (4, 4, 4)),
+    ("neghip.slc", (66, 66, 66), (1, 1, 1)),
+    ("ct_head.nrrd", (108, 256, 256), (1.5, 0.9570312, 0.9570312)),
+])
+def test_open_other_formats(make_napari_viewer, plugin, name, shape, scale):
+    v = make_napari_viewer()
+    layers = v.open(str(DATA / name), plugin="volvis")
+    assert len(layers) == 1
+    L = layers[0]
+    assert L.data.shape == shape and not L.multiscale
+    np.testing.assert_allclose(L.scale, scale, rtol=1e-6)
+    np.testing.assert_array_equal(np.asarray(L.data), volvis.open(DATA / name).array)
+
+
+@pytest.mark.parametrize("ext", [".nrrd", ".mha", ".vvb", ".vti", ".vtk", ".slc", ".ome.zarr"])
+def test_writer_round_trip(make_napari_viewer, plugin, out_dir, ext):
+    v = make_napari_viewer()
+    arr = volvis.open(DATA / "HeadMRVolume.mhd").array
+    L = v.add_image(arr, scale=(4, 2, 3), translate=(10, -5, 7), name="mr")
+    path = out_dir / ("written" + ext)
+    if path.is_dir():
+        import shutil
+        shutil.rmtree(path)
+    else:
+        path.unlink(missing_ok=True)
+    saved = L.save(str(path), plugin="volvis")
+    assert saved == [str(path)]
+    back = volvis.open(path)
+    np.testing.assert_array_equal(back.array, arr)
+    np.testing.assert_allclose(back.spacing, (3, 2, 4))
+    origin = (0, 0, 0) if ext == ".slc" else (7, -5, 10)  # SLC's header has no origin
+    np.testing.assert_allclose(back.origin, origin)
+    # and read back through the plug-in's reader
+    R = v.open(str(path), plugin="volvis")[0]
+    data = R.data[0] if R.multiscale else R.data
+    np.testing.assert_array_equal(np.asarray(data), arr)
+    np.testing.assert_allclose(R.scale, (4, 2, 3))
+    np.testing.assert_allclose(R.translate, origin[::-1])
+
+
+def test_writer_refuses_2d(make_napari_viewer, plugin, out_dir):
+    from volvis.napari._writer import write_image
+    with pytest.raises(volvis.InvalidError, match="3-D"):
+        write_image(str(out_dir / "flat.nrrd"), np.zeros((4, 5), np.uint8), {})
+    assert not (out_dir / "flat.nrrd").exists()
+
+
+def _final(qtbot, w, before):
+    w.request()
+    qtbot.waitUntil(lambda: w.finals > before or w.error is not None, timeout=45000)
+    assert w.error is None, w.error
+    return w.image.copy()
+
+
+def _cli_render(world, view, out_dir, name, volume):
+    """`volvis render` of the widget's World (saved as a scene) at its view,
+    by level of detail 1 pixel a voxel, as napari shows it."""
+    scene = out_dir / (name + ".json")
+    w = world.clone()
+    w.view = view
+    w.save(str(scene), volume_files=[str(volume)])
+    png = out_dir / (name + "_cli.png")
+    size = "%dx%d" % view.size
+    subprocess.run([cli(), "render", str(scene), "--lod", "1", "--size", size, "-o", str(png)],
+                   check=True, capture_output=True)
+    return volvis.read_png(str(png))
+
+
+@pytest.mark.parametrize("rendering", ["mip", "translucent"])
+def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin, ct_vvb,
+                                                out_dir, rendering):
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    L = v.open(str(ct_vvb), plugin="volvis")[0]
+    L.rendering = rendering
+    L.colormap = "inferno"
+    L.gamma = 0.8
+    v.dims.ndisplay = 3
+    viewer_camera(v).angles = (0, 20, 80)
+    w = VolVisWidget(v, max_side=256, debounce_ms=10)
+    v.window.add_dock_widget(w, name="VolVis 3-D")
+    img1 = _final(qtbot, w, 0)
+    f1 = dict(w.frame)
+    volvis.save_png(img1, str(out_dir / ("widget_%s_1.png" % rendering)))
+    ref1 = _cli_render(f1["world"], f1["view"], out_dir, "widget_%s_1" % rendering, ct_vvb)
+    if f1["mirror"]:
+        ref1 = ref1[:, ::-1]
+    p1 = psnr(img1, ref1)
+    assert p1 >= 40, "widget vs volvis render: %.2f dB" % p1
+    assert img1[..., :3].max() > 50, "a black frame"
+    assert sum(f1["lod"]["nodes"]) > 0
+    # turn napari's camera: the widget follows (debounced) and matches again
+    n = w.finals
+    viewer_camera(v).angles = (10, -35, 60)
+    qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+    img2 = w.image.copy()
+    f2 = dict(w.frame)
+    volvis.save_png(img2, str(out_dir / ("widget_%s_2.png" % rendering)))
+    assert psnr(img1, img2) < 30, "the frame did not change with the camera"
+    ref2 = _cli_render(f2["world"], f2["view"], out_dir, "widget_%s_2" % rendering, ct_vvb)
+    if f2["mirror"]:
+        ref2 = ref2[:, ::-1]
+    p2 = psnr(img2, ref2)
+    assert p2 >= 40, "after the turn, widget vs volvis render: %.2f dB" % p2
+    print("PSNR %s: %.2f dB, %.2f dB after the turn" % (rendering, p1, p2))
+
+
+def test_camera_mapping_against_napari_canvas(make_napari_viewer, qtbot, plugin, out_dir):
+    """The widget's view of napari's camera against napari's own 3-D canvas
+    (VisPy, OpenGL under Xvfb): MIP of neghip, several camera angles and a
+    perspective one; the widget's frame at the canvas's size must look like
+    the screenshot (the two sample differently: a loose bound), and better
+    than its mirror image (the handedness) and than the previous angle's."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer(show=True)
+    L = v.open(str(DATA / "neghip.slc"), plugin="volvis")[0]
+    L.rendering = "mip"
+    L.contrast_limits = (0, 255)
+    L.interpolation3d = "linear"
+    v.dims.ndisplay = 3
+    w = VolVisWidget(v, max_side=4096, debounce_ms=10)
+    cam = viewer_camera(v)
+    prev = None
+    for n, (angles, persp) in enumerate([((0, 0, 90), 0), ((0, 30, 90), 0),
+                                         ((20, -40, 60), 0), ((15, 25, 80), 30)]):
+        cam.angles = angles
+        cam.perspective = persp
+        shot = v.screenshot(canvas_only=True, flash=False)
+        img = _final(qtbot, w, w.finals)
+        if img.shape[:2] != shot.shape[:2]:
+            pytest.skip("canvas %s vs frame %s: the canvas model's size lags the canvas"
+                        % (shot.shape[:2], img.shape[:2]))
+        volvis.save_png(np.ascontiguousarray(shot[..., :4]), str(out_dir / ("napari_%d.png" % n)))
+        volvis.save_png(img, str(out_dir / ("widget_napari_%d.png" % n)))
+        p = psnr(shot, img)
+        pm = psnr(shot, img[:, ::-1])
+        print("angles %s perspective %s: %.2f dB (mirrored %.2f dB)" % (angles, persp, p, pm))
+        assert p >= 20, "widget vs napari's canvas at %s: %.2f dB" % (angles, p)
+        assert p > pm + 3, "the mirror image fits napari's canvas as well (%.2f, %.2f dB)" % (p, pm)
+        if prev is not None and prev.shape == img.shape:
+            assert p > psnr(shot, prev) + 3
+        prev = img
+
+
+def test_widget_shadows(make_napari_viewer, qtbot, plugin, out_dir):
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    L = v.open(str(DATA / "ct_head.nrrd"), plugin="volvis")[0]  # in memory
+    L.rendering = "iso"
+    L.iso_threshold = 300
+    v.dims.ndisplay = 3
+    viewer_camera(v).angles = (0, 30, 70)
+    w = VolVisWidget(v, max_side=192, debounce_ms=10)
+    plain = _final(qtbot, w, 0)
+    w.shadows.setChecked(True)
+    shadowed = _final(qtbot, w, w.finals)
+    assert w.frame["renderer"] == "raytrace"
+    volvis.save_png(plain, str(out_dir / "widget_iso.png"))
+    volvis.save_png(shadowed, str(out_dir / "widget_iso_shadows.png"))
+    assert psnr(plain, shadowed) < 35
+    # the same silhouette: shadows darken the surface, they do not move it
+    # (the ray tracer and the ray caster find the surface alike, to edge pixels)
+    assert np.mean((plain[..., 3] > 0) != (shadowed[..., 3] > 0)) < 0.01
+    # and it is what volvis render --renderer raytrace draws of the same World
+    f = w.frame
+    scene = out_dir / "widget_iso_shadows.json"
+    world = f["world"].clone()
+    world.view = f["view"]
+    world.save(str(scene), volume_files=[str(DATA / "ct_head.nrrd")])
+    png = out_dir / "widget_iso_shadows_cli.png"
+    subprocess.run([cli(), "render", str(scene), "--renderer", "raytrace", "--size",
+                    "%dx%d" % f["view"].size, "-o", str(png)], check=True, capture_output=True)
+    ref = volvis.read_png(str(png))
+    if f["mirror"]:
+        ref = ref[:, ::-1]
+    p = psnr(shadowed, ref)
+    assert p >= 40, "shadows: widget vs volvis render --renderer raytrace: %.2f dB" % p
+
+
+@pytest.fixture(scope="session")
+def zarr_pyramid(out_dir):
+    """A 256^3 u8 OME-Zarr pyramid (3 levels, volvis convert's 2x2x2 means)
+    with detail at every scale: a 1-voxel lattice of bright points over
+    smooth shells, so a coarse level is visibly not level 0."""
+    n = 256
+    z, y, x = np.ogrid[:n, :n, :n]
+    r = np.sqrt((x - 127.5) ** 2 + (y - 127.5) ** 2 + (z - 127.5) ** 2)
+    vol = (60 + 40 * np.cos(r / 6.0)).astype(np.float32) * (r < 120)
+    vol[::4, ::4, ::4] = np.where(r[::4, ::4, ::4] < 120, 255, 0)
+    src = out_dir / "lattice.nrrd"
+    volvis.Volume(vol.astype(np.uint8), spacing=(0.5, 0.5, 0.5)).save(str(src))
+    out = out_dir / "lattice.ome.zarr"
+    subprocess.run([cli(), "convert", "-q", str(src), str(out)], check=True)
+    return out
+
+
+def test_widget_level_of_detail(make_napari_viewer, qtbot, plugin, zarr_pyramid, out_dir):
+    """napari's own 3-D view of a multiscale layer draws its coarsest level
+    only; the widget draws level 0 where the view needs it (zoomed in) and
+    coarse levels where it does not (zoomed out), and equals volvis render
+    --lod 1 of the same World and view."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    L = v.open(str(zarr_pyramid), plugin="volvis")[0]
+    assert L.multiscale and [d.shape for d in L.data] == [(256,) * 3, (128,) * 3, (64,) * 3]
+    np.testing.assert_allclose(L.scale, (0.5, 0.5, 0.5))
+    L.rendering = "translucent"
+    L.colormap = "viridis"
+    L.contrast_limits = (90, 255)
+    v.dims.ndisplay = 3
+    cam = viewer_camera(v)
+    cam.angles = (0, 25, 80)
+    w = VolVisWidget(v, max_side=256, debounce_ms=10)
+    base_zoom = cam.zoom
+    cam.zoom = base_zoom / 4
+    far = _final(qtbot, w, w.finals)
+    nodes_far = list(w.frame["lod"]["nodes"])
+    w.follow.setChecked(False)  # one request for the near view: level 0 cold
+    qtbot.wait(100)
+    cam.zoom = base_zoom * 3
+    near = _final(qtbot, w, w.finals)
+    f = dict(w.frame)
+    # progressive: a quarter-size frame first, then full-size frames from
+    # what is resident while level 0's chunks load (some pending), the
+    # final frame last with none pending
+    kinds = [p[1] for p in w.passes]
+    assert kinds[0] == "coarse" and kinds[-1] == "final", w.passes
+    assert any(p[2] > 0 for p in w.passes[:-1]) and w.passes[-1][2] == 0, w.passes
+    nodes_near = list(f["lod"]["nodes"])
+    volvis.save_png(far, str(out_dir / "widget_lod_far.png"))
+    volvis.save_png(near, str(out_dir / "widget_lod_near.png"))
+    print("nodes per level: zoomed out %s, zoomed in %s" % (nodes_far, nodes_near))
+    assert nodes_far[0] == 0 and sum(nodes_far[1:]) > 0, nodes_far
+    assert nodes_near[0] > 0, nodes_near
+    ref = _cli_render(f["world"], f["view"], out_dir, "widget_lod_near", zarr_pyramid)
+    if f["mirror"]:
+        ref = ref[:, ::-1]
+    p = psnr(near, ref)
+    assert p >= 40, "LOD frame vs volvis render --lod 1: %.2f dB" % p
+
+
+@pytest.fixture(scope="session")
+def dicom_folder(out_dir):
+    """A CT series written by pydicom (an independent writer): 12 slices of
+    40x48 u16, one file a slice, 0.8 mm pixels, 2.5 mm apart; the folder's
+    name says nothing of DICOM."""
+    pydicom = pytest.importorskip("pydicom")
+    from pydicom.dataset import FileDataset, FileMetaDataset
+    from pydicom.uid import ExplicitVRLittleEndian, generate_uid
+    folder = out_dir / "ct_series"
+    folder.mkdir(exist_ok=True)
+    for f in folder.iterdir():
+        f.unlink()
+    rng = np.random.default_rng(3)
+    zyx = rng.integers(0, 4000, size=(12, 40, 48)).astype(np.uint16)
+    ct = "1.2.840.10008.5.1.4.1.1.2"
+    series, study, frame = generate_uid(), generate_uid(), generate_uid()
+    for z in rng.permutation(12):
+        meta = FileMetaDataset()
+        meta.MediaStorageSOPClassUID = ct
+        meta.MediaStorageSOPInstanceUID = generate_uid()
+        meta.TransferSyntaxUID = ExplicitVRLittleEndian
+        path = folder / ("slice%02d" % z)
+        ds = FileDataset(str(path), {}, file_meta=meta, preamble=b"\0" * 128)
+        ds.SOPClassUID, ds.SOPInstanceUID = ct, meta.MediaStorageSOPInstanceUID
+        ds.StudyInstanceUID, ds.SeriesInstanceUID = study, series
+        ds.FrameOfReferenceUID, ds.Modality, ds.SeriesNumber = frame, "CT", 2
+        ds.InstanceNumber = int(z) + 1
+        ds.ImageOrientationPatient = ["1", "0", "0", "0", "1", "0"]
+        ds.ImagePositionPatient = ["-20", "-16", "%.1f" % (10 + 2.5 * z)]
+        ds.PixelSpacing = ["0.8", "0.8"]
+        ds.SliceThickness = "2.5"
+        ds.SamplesPerPixel, ds.PhotometricInterpretation = 1, "MONOCHROME2"
+        ds.Rows, ds.Columns = 40, 48
+        ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 16, 15, 0
+        ds.PixelData = zyx[z].tobytes()
+        ds.save_as(str(path), enforce_file_format=True)
+    return folder, zyx
+
+
+def test_open_dicom_folder(make_napari_viewer, plugin, dicom_folder):
+    folder, zyx = dicom_folder
+    v = make_napari_viewer()
+    L = v.open(str(folder), plugin="volvis")[0]
+    assert L.data.shape == zyx.shape
+    np.testing.assert_allclose(L.scale, (2.5, 0.8, 0.8), rtol=1e-5)
+    vol = volvis.open(folder)
+    np.testing.assert_allclose(L.translate, vol.origin[::-1])
+    np.testing.assert_array_equal(np.asarray(L.data), vol.array)
+    np.testing.assert_array_equal(np.asarray(L.data), zyx)  # the voxels pydicom wrote
+
+
+def test_open_ome_zarr_channels(make_napari_viewer, plugin, out_dir):
+    """Two channels of an OME-Zarr 0.4 store written by ngff-zarr (an
+    independent writer) with omero names and colours: one lazy multiscale
+    layer each, named and coloured by the file, with its scale and
+    translation."""
+    nz = pytest.importorskip("ngff_zarr")
+    rng = np.random.default_rng(1)
+    a = rng.integers(0, 1000, size=(2, 32, 40, 48)).astype(np.uint16)
+    img = nz.to_ngff_image(a, dims=["c", "z", "y", "x"], scale={"z": 2.0, "y": 0.5, "x": 0.5},
+                           translation={"z": 1.0, "y": 2.0, "x": 3.0})
+    ms = nz.to_multiscales(img, scale_factors=[2])
+    ms.metadata.omero = nz.Omero(channels=[
+        nz.OmeroChannel(color="FF0000", window=nz.OmeroWindow(min=0, max=1000, start=10, end=900),
+                        label="DAPI"),
+        nz.OmeroChannel(color="00FF00", window=nz.OmeroWindow(min=0, max=1000, start=20, end=800),
+                        label="GFP")])
+    store = out_dir / "channels.ome.zarr"
+    nz.to_ngff_zarr(str(store), ms, version="0.4")
+    v = make_napari_viewer()
+    layers = v.open(str(store), plugin="volvis")
+    assert [L.name for L in layers] == ["DAPI", "GFP"]
+    for c, (L, rgb) in enumerate(zip(layers, [(1, 0, 0), (0, 1, 0)])):
+        assert L.multiscale and len(L.data) == 2
+        assert L.data[0].shape == (32, 40, 48)
+        np.testing.assert_allclose(L.scale, (2, 0.5, 0.5))
+        np.testing.assert_allclose(L.translate, (1, 2, 3))
+        np.testing.assert_array_equal(np.asarray(L.data[0]), a[c])
+        np.testing.assert_allclose(L.colormap.map(np.array([1.0]))[0][:3], rgb, atol=1e-6)
+        np.testing.assert_allclose(L.colormap.map(np.array([0.0]))[0][:3], (0, 0, 0), atol=1e-6)
+        assert L.blending == "additive"
+
+
+def test_widget_closed_stops_following(make_napari_viewer, qtbot, plugin):
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    v.open(str(DATA / "neghip.slc"), plugin="volvis")
+    v.dims.ndisplay = 3
+    w = VolVisWidget(v, max_side=64, debounce_ms=10)
+    _final(qtbot, w, 0)
+    w.close()
+    n = w.frames
+    viewer_camera(v).angles = (0, 40, 90)
+    qtbot.wait(300)
+    assert w.frames == n
+
+
+def test_reader_declines_and_fails_cleanly(make_napari_viewer, plugin, out_dir):
+    from volvis.napari._reader import get_reader, read
+    other = out_dir / "other.xml"
+    other.write_text("<?xml version='1.0'?><svg/>")
+    assert get_reader(str(other)) is None  # not BigDataViewer's: left to others
+    assert get_reader(str(out_dir / "x.png")) is None
+    bad = out_dir / "bad.nrrd"
+    bad.write_bytes(b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4\n\n")
+    with pytest.raises(volvis.Error) as e:
+        read(str(bad))
+    msg = str(e.value)
+    assert "bad.nrrd" in msg and "\n" not in msg.strip(), msg
+
+
+@pytest.fixture(scope="session")
+def hdf5_files(out_dir):
+    """A BigDataViewer HDF5 file (two setups) and an Imaris file, 3 levels
+    each, written by h5py (Debian's python3, tests/napari/make_hdf5.py)."""
+    d = out_dir / "hdf5"
+    d.mkdir(exist_ok=True)
+    r = subprocess.run(["/usr/bin/python3", str(pathlib.Path(__file__).parent / "make_hdf5.py"),
+                        str(d)], capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip("h5py (python3-h5py) could not write the files: " + r.stderr.strip()[-300:])
+    return d
+
+
+def test_open_bigdataviewer_and_imaris(make_napari_viewer, plugin, hdf5_files):
+    from volvis.napari._reader import level_array
+    v = make_napari_viewer()
+    layers = v.open(str(hdf5_files / "bdv.h5"), plugin="volvis")
+    assert len(layers) == 2  # one a setup
+    for s, L in enumerate(layers):
+        assert L.multiscale and len(L.data) == 3
+        assert level_array(L.data[0]) is not None
+        for k in range(3):
+            np.testing.assert_array_equal(np.asarray(L.data[k]),
+                                          np.load(hdf5_files / ("bdv_s%d_l%d.npy" % (s, k))))
+    L = v.open(str(hdf5_files / "cells.ims"), plugin="volvis")[0]
+    assert L.multiscale and [d.shape for d in L.data] == [(36, 44, 52), (18, 22, 26), (9, 11, 13)]
+    np.testing.assert_allclose(L.scale, (2.0, 0.5, 0.25), rtol=1e-5)
+    for k in range(3):  # Imaris's padding to 32 cut off
+        np.testing.assert_array_equal(np.asarray(L.data[k]), np.load(hdf5_files / ("ims_l%d.npy" % k)))
+
+
+@pytest.mark.parametrize("rendering,mode", [("translucent", "composite"), ("mip", "mip"),
+                                            ("minip", "minip"), ("average", "xray"),
+                                            ("iso", "iso"), ("attenuated_mip", "mip")])
+def test_layer_transfer_function(make_napari_viewer, rendering, mode):
+    """The layer's colormap, contrast limits, gamma and opacity as the
+    transfer function evaluates them (vv_tf_eval_*), at data values between
+    the points of its table and outside the limits."""
+    from volvis.napari._widget import layer_object
+    v = make_napari_viewer()
+    L = v.add_image(np.zeros((4, 5, 6), np.uint16), colormap="magma", contrast_limits=(100, 900),
+                    gamma=0.6, opacity=0.7, rendering=rendering, iso_threshold=500)
+    obj, pyr, note = layer_object(L)
+    assert pyr is None and obj.mode == mode
+    assert bool(note) == (rendering == "attenuated_mip")
+    pts = (obj.tf.color[:, 0] - 100) / 800
+    assert len(pts) == len(obj.tf.opacity) <= 130
+    t = 0.5 * (pts[1:] + pts[:-1])  # midway between the table's points
+    values = 100 + 800 * t
+    got = obj.tf(values)
+    want = L.colormap.map(t ** 0.6)[:, :3]
+    # linear between the points: within the curvature of colormap(t^gamma)
+    assert np.max(np.abs(got[:, :3] - want)) < 0.01
+    want_a = 0.7 * t ** 0.6 if mode == "composite" else np.full_like(t, 0.7)
+    assert np.max(np.abs(got[:, 3] - want_a)) < 0.01
+    below, above = obj.tf([0, 5000])
+    np.testing.assert_allclose(below[:3], L.colormap.map(np.array([0.0]))[0][:3], atol=1e-6)
+    np.testing.assert_allclose(above[:3], L.colormap.map(np.array([1.0]))[0][:3], atol=1e-6)
+    if mode == "iso":
+        assert obj.isovalue == 500
+        np.testing.assert_allclose(obj.material.color,
+                                   L.colormap.map(np.array([0.5 ** 0.6]))[0][:3], atol=1e-6)
+
+
+def test_widget_two_layers_and_visibility(make_napari_viewer, qtbot, plugin, out_dir):
+    """Two visible layers are two objects of one World (MIP in green and
+    magenta, combined by the maximum); hiding one re-renders (the widget
+    follows the layers' events) and matches volvis render again."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v = make_napari_viewer()
+    a = v.open(str(DATA / "neghip.slc"), plugin="volvis")[0]
+    b = v.open(str(DATA / "ironProt.vtk"), plugin="volvis")[0]
+    for L, cmap in ((a, "green"), (b, "magenta")):
+        L.rendering = "mip"
+        L.colormap = cmap
+        L.contrast_limits = (0, 255)
+    b.translate = (0, 0, 80)
+    v.dims.ndisplay = 3
+    v.reset_view()
+    viewer_camera(v).angles = (0, 20, 75)
+    w = VolVisWidget(v, max_side=192, debounce_ms=10)
+    both = _final(qtbot, w, 0)
+    f = dict(w.frame)
+    assert len(f["world"].objects) == 2
+    ref = _cli_render_files(f, out_dir, "two_layers",
+                            [DATA / "neghip.slc", DATA / "ironProt.vtk"])
+    assert psnr(both, ref) >= 40
+    g, m = both[..., 1].astype(int), both[..., 0].astype(int)
+    assert (g > m + 50).any() and (m > g + 50).any(), "both layers' colours"
+    n = w.finals
+    b.visible = False
+    qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+    one = w.image.copy()
+    f = dict(w.frame)
+    assert len(f["world"].objects) == 1
+    assert psnr(both, one) < 30
+    assert not (one[..., 0].astype(int) > one[..., 1].astype(int) + 50).any()  # no magenta
+    ref = _cli_render_files(f, out_dir, "one_layer", [DATA / "neghip.slc"])
+    assert psnr(one, ref) >= 40
+    volvis.save_png(both, str(out_dir / "widget_two_layers.png"))
+    volvis.save_png(one, str(out_dir / "widget_one_layer.png"))
+
+
+def _cli_render_files(f, out_dir, name, files):
+    scene = out_dir / (name + ".json")
+    w = f["world"].clone()
+    w.view = f["view"]
+    w.save(str(scene), volume_files=[str(p) for p in files])
+    png = out_dir / (name + "_cli.png")
+    subprocess.run([cli(), "render", str(scene), "--size", "%dx%d" % f["view"].size,
+                    "-o", str(png)], check=True, capture_output=True)
+    ref = volvis.read_png(str(png))
+    return ref[:, ::-1] if f["mirror"] else ref
