@@ -16,8 +16,11 @@ usage: bench/pairs_vtk.py VOLUME [--pairs N] [--runs N] [--threads N]
                           [--iso V] [--tf-lo A] [--tf-hi B]
                           [--quality Q] [--option KEY=VALUE]...
                           [--vtk venv|debian|PYTHON] [--mappers LIST]
-                          [--bench PATH] [--anchors DIR]
+                          [--bench PATH] [--bench-b PATH] [--anchors DIR]
 
+--bench-b names a second bench_raycast (another build, e.g. main's) that
+runs right after the first in every pair, so that two builds are compared
+with each other and with VTK in the same run ("B" in the output).
 --vtk picks the VTK: `venv` (the default) is VTK 9.7 from PyPI in the
 repository's .venv (scripts/install-deps.sh bench), rendering offscreen
 through EGL; `debian` is Debian's VTK 9.1 (/usr/bin/python3, python3-vtk9,
@@ -53,6 +56,7 @@ def parse_args():
     ap.add_argument("--mappers", default="fixedpoint",
                     help="VTK mappers, comma-separated: fixedpoint, smart (its CPU path)")
     ap.add_argument("--bench", default=os.path.join(ROOT, "build/release/bench/bench_raycast"))
+    ap.add_argument("--bench-b", default=None, help="a second bench_raycast, run in every pair")
     ap.add_argument("--anchors", default=os.path.join(os.path.dirname(ROOT), "shared/anchors"))
     return ap.parse_args()
 
@@ -121,6 +125,21 @@ def main():
         vv = run(vv_cmd)
         sys.stdout.write(vt + vv)
         v, w = values(vt), values(vv)
+        if a.bench_b:
+            vb = run([a.bench_b] + vv_cmd[1:])
+            wb = values(vb)
+            line = "# pair %d, B (%s):" % (i + 1, a.bench_b)
+            for m in ("composite", "mip"):
+                t_b = wb["dvr_%s_frame" % m]
+                c_b = t_b * wb.get("dvr_%s_cpu_per_wall" % m, float("nan"))
+                cpu.setdefault(("B", m), []).append(c_b)
+                ratios.setdefault(("B", m), []).append(t_b / w["dvr_%s_frame" % m])
+                for mp in mappers:
+                    ratios.setdefault((mp, m, "B"), []).append(
+                        v["dvr_%s_%s_frame" % (mp, m)] / t_b)
+                line += " %s B %.4f s (cpu %.3f s), B/VolVis %.2fx;" % (
+                    m, t_b, c_b, t_b / w["dvr_%s_frame" % m])
+            print(line, flush=True)
         for line in vt.splitlines():
             if line.startswith("anchor=vtk-"):
                 version = line.split()[0][len("anchor=vtk-"):]
@@ -154,6 +173,15 @@ def main():
                statistics.median(ratios[(mp, "mip")]),
                statistics.median(cpu[(mp, "composite")]), statistics.median(cpu[("volvis", "composite")]),
                statistics.median(cpu[(mp, "mip")]), statistics.median(cpu[("volvis", "mip")])))
+    if a.bench_b:
+        for mp in mappers:
+            print("# B: median VTK/B (%s) composite %.2fx, MIP %.2fx; B/VolVis composite %.2fx, "
+                  "MIP %.2fx; B's CPU s a frame composite %.3f, MIP %.3f" %
+                  (mp, statistics.median(ratios[(mp, "composite", "B")]),
+                   statistics.median(ratios[(mp, "mip", "B")]),
+                   statistics.median(ratios[("B", "composite")]),
+                   statistics.median(ratios[("B", "mip")]),
+                   statistics.median(cpu[("B", "composite")]), statistics.median(cpu[("B", "mip")])))
     print("# VolVis iso frame median %.4f s" % statistics.median(iso))
 
 

@@ -43,6 +43,11 @@ typedef struct vv_render_stats {
      * voxel) fit neither the renderer's gradient_budget_mb nor half the
      * memory left (the ray caster counts them; others add nothing) */
     uint32_t gradients_at_samples;
+    /** shading tables the frame built (the ray caster's shading=table: a
+     * diffuse and a specular term per normal code, rebuilt when a light,
+     * the view direction, the material or the object's orientation
+     * changed; 0 when the previous frame's served) */
+    uint32_t shading_tables_built;
     /** milliseconds the device spent on the frame's commands, between two
      * timestamps around them (the gpu renderer: uploads, the ray casting
      * dispatch and the copy back; others add nothing) */
@@ -136,9 +141,18 @@ typedef struct vv_render_options {
      * VV_ERR_UNSUPPORTED (what the CLI reports).
      */
     int proxy_fallback;
+    /**
+     * 1: a renderer that offers a cheaper shading uses it for this frame
+     * whatever its options say (the ray caster: shading=table, Phong's
+     * terms per normal code blended at the samples, >= 40 dB from Phong);
+     * the Navigator's reduced previews set it. 0: the renderer's options
+     * decide.
+     */
+    int fast_shading;
 } vv_render_options;
 
-/** threads 0, quality 2, no progress callback, no stats, no lod, no proxy fallback. */
+/** threads 0, quality 2, no progress callback, no stats, no lod, no proxy fallback, the
+ * renderer's own shading. */
 void vv_render_options_init(vv_render_options *o);
 
 /* ---- typed option tables ------------------------------------------------ */
