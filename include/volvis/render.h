@@ -43,15 +43,15 @@ typedef struct vv_render_stats {
      * voxel) fit neither the renderer's gradient_budget_mb nor half the
      * memory left (the ray caster counts them; others add nothing) */
     uint32_t gradients_at_samples;
+    /** milliseconds the device spent on the frame's commands, between two
+     * timestamps around them (the gpu renderer: uploads, the ray casting
+     * dispatch and the copy back; others add nothing) */
+    double device_ms;
     /** shading tables the frame built (the ray caster's shading=table: a
      * diffuse and a specular term per normal code, rebuilt when a light,
      * the view direction, the material or the object's orientation
      * changed; 0 when the previous frame's served) */
     uint32_t shading_tables_built;
-    /** milliseconds the device spent on the frame's commands, between two
-     * timestamps around them (the gpu renderer: uploads, the ray casting
-     * dispatch and the copy back; others add nothing) */
-    double device_ms;
 } vv_render_stats;
 
 #define VV_LOD_MAX_LEVELS 16 /**< levels a level-of-detail frame draws from */

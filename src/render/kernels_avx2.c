@@ -321,9 +321,12 @@ gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const fl
  * are kept by row, VC_DSTRIDE floats a component (cells in lanes): row r's x-pair (x0, y0, z0, x1,
  * y1, z1) at D[6 r + k]. */
 #define VC_DSTRIDE (VV_VC_CHUNK + 16)
+/* corner caching where a chunk's distinct cells are at most NUM/DEN of its
+ * visible samples: always (1/1); 1/2, 3/4 and never measured no faster
+ * (docs/rendering.md, issue 81) */
 #ifndef VV_VC_CORNER_SHARE_NUM
-#define VV_VC_CORNER_SHARE_NUM 1 /* corner caching where distinct cells <= NUM/DEN samples */
-#define VV_VC_CORNER_SHARE_DEN 2
+#define VV_VC_CORNER_SHARE_NUM 1
+#define VV_VC_CORNER_SHARE_DEN 1
 #endif
 
 /* The decoded corners of the distinct cells ucell[j0 .. j0 + nj - 1] (nj

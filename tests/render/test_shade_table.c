@@ -10,7 +10,8 @@
  * far from its own image under the old one); an orthographic camera
  * moved parallel to itself (a pan: view direction and headlight unchanged)
  * reuses it, a turned one rebuilds it; vv_render_options.fast_shading
- * (the Navigator's previews) gives the table image with shading=phong set.
+ * gives the table image with shading=phong set, and the Navigator's reduced
+ * previews shade by table while its final frame keeps Phong.
  * The PNGs go to build/.../test-out/render/ to look at.
  */
 #include "testutil.h"
@@ -19,6 +20,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "volvis/navigator.h"
 #include "volvis/render.h"
 
 static vv_image *
@@ -142,6 +144,51 @@ check_volume(const char *file, const char *tag, double lo, double hi) {
     vv_volume_free(vol);
 }
 
+/* The Navigator's previews (vv_preview_render): a reduced ray cast of a
+ * warm volume builds a shading table, the final frame builds none and is
+ * the Phong renderer's image. */
+static void
+test_previews_use_table(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/neghip.slc")) {
+        vt_skip("volumes/neghip.slc is missing (../shared/data)");
+        return;
+    }
+    vv_volume *vol = NULL;
+    vv_world *w = vt_volume_scene("volumes/neghip.slc", 128, &vol);
+    vv_preview *pv = NULL;
+    vt_ok(vv_preview_new(&pv, "raycast"));
+    int pw, ph;
+    vv_preview_size(VV_PREVIEW_RAYCAST_2, 128, 128, &pw, &ph);
+    vv_image *small = NULL, *full = NULL;
+    vt_ok(vv_image_new(&small, pw, ph));
+    vt_ok(vv_image_new(&full, 128, 128));
+    vv_render_stats st = {0};
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.stats = &st;
+    /* the first reduced cast is unshaded (no gradients yet), the next shade */
+    for (int i = 0; i < 3; i++)
+        vt_ok(vv_preview_render(pv, w, &w->view, VV_PREVIEW_RAYCAST_2, &opt, small));
+    assert_int_equal(st.shading_tables_built, 1);
+    st.shading_tables_built = 0;
+    vt_ok(vv_preview_render(pv, w, &w->view, VV_PREVIEW_FULL, &opt, full));
+    assert_int_equal(st.shading_tables_built, 0);
+    vv_renderer *phong = NULL;
+    vt_ok(vv_renderer_new(&phong, "raycast"));
+    vv_image *ref = render(phong, w, 0, NULL);
+    int same = 0;
+    vt_image_psnr(ref, full, &same);
+    assert_true(same);
+    vv_image_free(ref);
+    vv_renderer_free(phong);
+    vv_image_free(small);
+    vv_image_free(full);
+    vv_preview_free(pv);
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
 static void
 test_table_ct_head(void **state) {
     (void)state;
@@ -159,6 +206,7 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_table_ct_head),
         cmocka_unit_test(test_table_neghip),
+        cmocka_unit_test(test_previews_use_table),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
