@@ -1,7 +1,8 @@
 /*
  * The AVX2 kernels of the volume renderers: the vector paths of the
  * sampling (eight trilinear samples at a time), classification (a chunk of
- * samples, with FMA), shading (Phong, eight samples at a time), ray (runs
+ * samples, with FMA), shading (Phong, eight samples at a time; and by
+ * table, shade_table.h), ray (runs
  * of visible subvolumes found by sample) and projection (the MIP and MinIP
  * march in chunks of samples) stages. They are compiled for AVX2 through
  * target attributes, the rest of the library keeping the x86-64 baseline,
@@ -310,94 +311,6 @@ gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const fl
     *gz = _mm256_add_ps(_mm256_add_ps(Z[0], Z[2]), _mm256_add_ps(Z[1], Z[3]));
 }
 
-/* Corner caching (VTK's VTKKWRCHelper_InterpolateShading keeps a cell's
- * corner data while the ray stays in it): consecutive samples of a ray
- * often share a cell, so the chunk's shading pass decodes the octahedral
- * codes of each distinct cell once (eight cells at a time, one a lane),
- * then moves each sample's corners into its lane by a permutation. Each
- * row of a cell's four x-pairs of codes is put into lanes by inserts, not
- * stored and reloaded (a vector load of eight scalar stores waits for
- * all); hardware gathers measured 10 % slower there (docs/rendering.md). The cells' decoded corners
- * are kept by row, VC_DSTRIDE floats a component (cells in lanes): row r's x-pair (x0, y0, z0, x1,
- * y1, z1) at D[6 r + k]. */
-#define VC_DSTRIDE (VV_VC_CHUNK + 16)
-/* corner caching where a chunk's distinct cells are at most NUM/DEN of its
- * visible samples: always (1/1); 1/2, 3/4 and never measured no faster
- * (docs/rendering.md, issue 81) */
-#ifndef VV_VC_CORNER_SHARE_NUM
-#define VV_VC_CORNER_SHARE_NUM 1
-#define VV_VC_CORNER_SHARE_DEN 1
-#endif
-
-/* The decoded corners of the distinct cells ucell[j0 .. j0 + nj - 1] (nj
- * <= 8) into D at j0 .. j0 + 7, one lane a cell (lanes past nj repeat
- * cell j0): vv_vcache_gradient_at's four x-pairs of each cell, decoded
- * eight at a time (oct_decode8). */
-__attribute__((target("avx2"))) static void
-decode_cells8_avx2(const vv_vcache *c, const size_t *ucell, int j0, int nj,
-                   float (*D)[VC_DSTRIDE]) {
-    const size_t sy = 2 * c->sy, sz = 2 * c->sz;
-    const int8_t *p[8];
-    for (int q = 0; q < 8; q++)
-        p[q] = c->nrm + 2 * ucell[j0 + (q < nj ? q : 0)];
-    const size_t off[4] = {0, sy, sz, sz + sy};
-    for (int r = 0; r < 4; r++) {
-        int32_t a[8];
-        for (int q = 0; q < 8; q++)
-            memcpy(&a[q], p[q] + off[r], 4);
-        const __m256i b = _mm256_setr_epi32(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]);
-        __m256 x0, y0, z0, x1, y1, z1;
-        oct_decode8(_mm256_srai_epi32(_mm256_slli_epi32(b, 24), 24),
-                    _mm256_srai_epi32(_mm256_slli_epi32(b, 16), 24), &x0, &y0, &z0);
-        oct_decode8(_mm256_srai_epi32(_mm256_slli_epi32(b, 8), 24), _mm256_srai_epi32(b, 24), &x1,
-                    &y1, &z1);
-        _mm256_storeu_ps(D[6 * r + 0] + j0, x0);
-        _mm256_storeu_ps(D[6 * r + 1] + j0, y0);
-        _mm256_storeu_ps(D[6 * r + 2] + j0, z0);
-        _mm256_storeu_ps(D[6 * r + 3] + j0, x1);
-        _mm256_storeu_ps(D[6 * r + 4] + j0, y1);
-        _mm256_storeu_ps(D[6 * r + 5] + j0, z1);
-    }
-}
-
-/* vv_vcache_gradient_at of eight samples from the decoded corners of their
- * distinct cells: the visible samples vis[0 .. n8 - 1] (n8 <= 8; lanes
- * past n8 repeat the first), sample q in distinct cell uid[q] (uid[0] <=
- * uid[q] <= uid[0] + 7, decoded in D), each lane's corners moved into
- * place by a permutation, then lerped in x, weighted by the rows'
- * bilinear weights and summed in vv_vcache_gradient_at's order of
- * operations, so that the gradients are its own. */
-__attribute__((target("avx2"))) static void
-gradient8_cached_avx2(float (*D)[VC_DSTRIDE], const int *uid, const float *fx, const float *fy,
-                      const float *fz, const int *vis, int n8, __m256 *gx, __m256 *gy, __m256 *gz) {
-    const __m256i live =
-        _mm256_cmpgt_epi32(_mm256_set1_epi32(n8), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    const __m256i at =
-        _mm256_blendv_epi8(_mm256_set1_epi32(vis[0]), _mm256_maskload_epi32(vis, live), live);
-    const int base = uid[0];
-    const __m256i idx = _mm256_sub_epi32(
-        _mm256_blendv_epi8(_mm256_set1_epi32(base), _mm256_maskload_epi32(uid, live), live),
-        _mm256_set1_epi32(base));
-    const __m256 one = _mm256_set1_ps(1.0f), f0 = _mm256_i32gather_ps(fx, at, 4);
-    const __m256 f1 = _mm256_i32gather_ps(fy, at, 4), f2 = _mm256_i32gather_ps(fz, at, 4);
-    const __m256 g1 = _mm256_sub_ps(one, f1), g2 = _mm256_sub_ps(one, f2);
-    const __m256 w[4] = {_mm256_mul_ps(g1, g2), _mm256_mul_ps(f1, g2), _mm256_mul_ps(g1, f2),
-                         _mm256_mul_ps(f1, f2)};
-    __m256 X[4], Y[4], Z[4];
-    for (int r = 0; r < 4; r++) {
-#define VC_CORNER(k) _mm256_permutevar8x32_ps(_mm256_loadu_ps(D[6 * r + (k)] + base), idx)
-        const __m256 x0 = VC_CORNER(0), y0 = VC_CORNER(1), z0 = VC_CORNER(2);
-        const __m256 x1 = VC_CORNER(3), y1 = VC_CORNER(4), z1 = VC_CORNER(5);
-#undef VC_CORNER
-        X[r] = _mm256_mul_ps(_mm256_add_ps(x0, _mm256_mul_ps(_mm256_sub_ps(x1, x0), f0)), w[r]);
-        Y[r] = _mm256_mul_ps(_mm256_add_ps(y0, _mm256_mul_ps(_mm256_sub_ps(y1, y0), f0)), w[r]);
-        Z[r] = _mm256_mul_ps(_mm256_add_ps(z0, _mm256_mul_ps(_mm256_sub_ps(z1, z0), f0)), w[r]);
-    }
-    *gx = _mm256_add_ps(_mm256_add_ps(X[0], X[2]), _mm256_add_ps(X[1], X[3]));
-    *gy = _mm256_add_ps(_mm256_add_ps(Y[0], Y[2]), _mm256_add_ps(Y[1], Y[3]));
-    *gz = _mm256_add_ps(_mm256_add_ps(Z[0], Z[2]), _mm256_add_ps(Z[1], Z[3]));
-}
-
 __attribute__((target("avx2"))) int
 vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
                  const vv_vlight *lights, int n_lights, const float v[3], int m, const size_t *cell,
@@ -410,27 +323,6 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
         vis[nvis] = s;
         nvis += lut[entry[s]] > 0;
     }
-    /* the distinct cells of the visible samples in order (consecutive
-     * samples in one cell share it), each sample's index among them, and
-     * the cells decoded (D) up to ndec as the samples need them */
-    int nu = nvis > 0;
-    for (int i = 1; i < nvis; i++)
-        nu += cell[vis[i]] != cell[vis[i - 1]];
-    /* worth it only where samples share cells enough to pay for the
-     * permutations (VV_VC_CORNER_SHARE_*) */
-    const int cached = nu * VV_VC_CORNER_SHARE_DEN <= nvis * VV_VC_CORNER_SHARE_NUM;
-    size_t ucell[VV_VC_CHUNK + 1];
-    int uid[VV_VC_CHUNK + 8], ndec = 0;
-    if (cached) {
-        int j = -1;
-        for (int i = 0; i < nvis; i++) {
-            const size_t co = cell[vis[i]];
-            j += i == 0 || co != cell[vis[i - 1]];
-            ucell[j] = co;
-            uid[i] = j;
-        }
-    }
-    float D[24][VC_DSTRIDE];
     for (int i0 = 0; i0 < nvis; i0 += 8) {
         const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
         float sh[VV_MAX_LIGHTS * 8];
@@ -438,15 +330,7 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
         if (shadow)
             memset(sh, 0, sizeof(float) * 8 * (size_t)n_lights);
         __m256 gx, gy, gz;
-        if (cached) {
-            while (ndec <= uid[i0 + n8 - 1]) {
-                decode_cells8_avx2(c, ucell, ndec, nu - ndec < 8 ? nu - ndec : 8, D);
-                ndec += 8;
-            }
-            gradient8_cached_avx2(D, uid + i0, fx, fy, fz, vis + i0, n8, &gx, &gy, &gz);
-        } else {
-            gradient8_avx2(c, cell, fx, fy, fz, vis + i0, n8, &gx, &gy, &gz);
-        }
+        gradient8_avx2(c, cell, fx, fy, fz, vis + i0, n8, &gx, &gy, &gz);
         /* the table entries of the eight (zero in lanes past n8) */
         const __m256i live =
             _mm256_cmpgt_epi32(_mm256_set1_epi32(n8), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));

@@ -421,7 +421,7 @@ table_corners(const vv_vcache *c, const vv_vshade_table *t, size_t o, rc_v8f k[8
  * its corner data while the ray stays in a cell. *first (when < 0) gets
  * the chunk index of the first sample composited; *shaded counts them.
  * Returns 1 when the ray ended. */
-static int
+__attribute__((noinline)) static int
 chunk_shade_table(const rc_obj *ob, int m, const size_t *cell, const float *fx, const float *fy,
                   const float *fz, const int32_t *entry, float et, float C[3], float *A, int *first,
                   uint32_t *shaded, size_t *kcell, rc_v8f k[8]) {
