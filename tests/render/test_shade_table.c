@@ -5,6 +5,7 @@
  * (the CT head and neghip of ../shared/data): its image is at least 40 dB
  * from Phong's at the same settings, and not Phong's (the table path ran);
  * the table is built on the first frame and not again for the same one;
+ * the portable path (float table) agrees with the AVX2 one (>= 60 dB);
  * it is rebuilt when the light moves, and the image follows the light (the
  * table image under the new light is >= 40 dB from Phong's under it, and
  * far from its own image under the old one); an orthographic camera
@@ -89,6 +90,15 @@ check_volume(const char *file, const char *tag, double lo, double hi) {
     vv_image *t2 = render_table(table, w, &built);
     assert_int_equal(built, 0);
     assert_true(vt_image_psnr(t, t2, &same) == INFINITY && same);
+    /* the portable path (float table, corners kept while the ray stays in
+     * a cell) against the AVX2 one (16-bit packed table) */
+    vt_ok(vv_renderer_set_option(table, "simd", "0"));
+    vv_image *tp = render_table(table, w, &built);
+    vt_ok(vv_renderer_set_option(table, "simd", "1"));
+    const double db_portable = vt_image_psnr(t, tp, NULL);
+    print_message("%s: portable table path %.2f dB from the AVX2 one\n", tag, db_portable);
+    assert_true(db_portable >= 60.0);
+    vv_image_free(tp);
     /* fast_shading (previews) on a Phong renderer: the table image */
     vv_render_stats st = {0};
     vv_image *f = render(phong, w, 1, &st);
