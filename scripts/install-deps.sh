@@ -46,7 +46,7 @@ for what in "$@"; do
                  libxcb-randr0 libxcb-render-util0 libxcb-xinerama0 libxcb-xkb1 libxcb-cursor0 libxcb-shape0)
           venv=1 wheelvenv=1 ;;
     fuzz) pkgs+=(clang-14 libclang-rt-14-dev libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
-    bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers python3-venv)
+    bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri libegl1 libegl-mesa0 teem-apps zfp mesa-vulkan-drivers python3-venv)
            venv=1 ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, fuzz, bench)" >&2; exit 2 ;;
   esac

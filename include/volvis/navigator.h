@@ -238,7 +238,10 @@ vv_renderer *vv_preview_final_renderer(vv_preview *p);
  * vv_renderer_render of the final renderer gives (the same image `volvis
  * render` writes for the same World). The first reduced ray cast of a
  * volume is drawn without shading (its gradients are not cached yet), so
- * that a first image appears at once. Errors: those of the renderers,
+ * that a first image appears at once; later reduced ray casts shade by
+ * table (vv_render_options.fast_shading: the ray caster's shading=table,
+ * >= 40 dB from Phong), the final representation as its renderer's
+ * options say (Phong by default). Errors: those of the renderers,
  * VV_ERR_CANCELLED.
  */
 vv_status vv_preview_render(vv_preview *p, const vv_world *world, const vv_view *view,

@@ -47,6 +47,11 @@ typedef struct vv_render_stats {
      * timestamps around them (the gpu renderer: uploads, the ray casting
      * dispatch and the copy back; others add nothing) */
     double device_ms;
+    /** shading tables the frame built (the ray caster's shading=table: a
+     * diffuse and a specular term per normal code, rebuilt when a light,
+     * the view direction, the material or the object's orientation
+     * changed; 0 when the previous frame's served) */
+    uint32_t shading_tables_built;
 } vv_render_stats;
 
 #define VV_LOD_MAX_LEVELS 16 /**< levels a level-of-detail frame draws from */
@@ -154,13 +159,21 @@ typedef struct vv_render_options {
      * VV_ERR_UNSUPPORTED (what the CLI reports).
      */
     int proxy_fallback;
+    /**
+     * 1: a renderer that offers a cheaper shading uses it for this frame
+     * whatever its options say (the ray caster: shading=table, Phong's
+     * terms per normal code blended at the samples, >= 40 dB from Phong);
+     * the Navigator's reduced previews set it. 0: the renderer's options
+     * decide.
+     */
+    int fast_shading;
     /** NULL, or where a successful vv_renderer_render also leaves the frame
      *  in 8 bits (vv_pixels8); its size must be the view's. */
     vv_pixels8 *pixels8;
 } vv_render_options;
 
-/** threads 0, quality 2, no progress callback, no stats, no lod, no proxy fallback, no
- *  8-bit pixels. */
+/** threads 0, quality 2, no progress callback, no stats, no lod, no proxy fallback, the
+ *  renderer's own shading, no 8-bit pixels. */
 void vv_render_options_init(vv_render_options *o);
 
 /* ---- typed option tables ------------------------------------------------ */

@@ -409,6 +409,7 @@ vv_preview_render(vv_preview *p, const vv_world *world, const vv_view *view, vv_
         return vv_renderer_render(p->final, world, view, &o, out);
     }
     o.quality = 0;
+    o.fast_shading = 1; /* the ray caster's shading=table: the final frame keeps its own */
     switch (kind) {
     case VV_PREVIEW_RAYCAST_8: /* a coarser step would lose thin structures */
         return render_reduced(p, world, view, 4, &o, out);

@@ -1,7 +1,8 @@
 /*
  * The AVX2 kernels of the volume renderers: the vector paths of the
  * sampling (eight trilinear samples at a time), classification (a chunk of
- * samples, with FMA), shading (Phong, eight samples at a time), ray (runs
+ * samples, with FMA), shading (Phong, eight samples at a time; and by
+ * table, shade_table.h), ray (runs
  * of visible subvolumes found by sample) and projection (the MIP and MinIP
  * march in chunks of samples) stages. They are compiled for AVX2 through
  * target attributes, the rest of the library keeping the x86-64 baseline,
@@ -29,6 +30,7 @@
 #include "render/ray.h"
 #include "render/sample.h"
 #include "render/shade.h"
+#include "render/shade_table.h"
 
 #if VV_VC_HAVE_AVX2
 /* ---------------------------------------------------------------------- */
@@ -362,6 +364,98 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
             c1 += w * org[q];
             c2 += w * orb[q];
             acc += w * alf[q];
+            q++;
+            if (acc >= et) {
+                end = 1;
+                break;
+            }
+        }
+        C[0] = c0;
+        C[1] = c1;
+        C[2] = c2;
+        *A = acc;
+        *shaded += (uint32_t)q;
+        if (end)
+            return 1;
+    }
+    return 0;
+}
+
+/* vv_vchunk_shade8_table: shading=table eight samples at a time (one a
+ * lane): each row of a cell's corners is a 32-bit load of two 16-bit codes,
+ * which index the packed table by a gather each; the diffuse and specular
+ * halves are lerped in x, weighted by the rows' bilinear weights and
+ * summed, as vv_vcache_gradient_at blends normals. */
+__attribute__((target("avx2,fma"))) int
+vv_vchunk_shade8_table(const vv_vcache *c, const float *lut, const vv_vshade_table *t, int m,
+                       const size_t *cell, const float *fx, const float *fy, const float *fz,
+                       const int32_t *entry, float et, float C[3], float *A, int *first,
+                       uint32_t *shaded) {
+    int vis[VV_VC_CHUNK + 8], nvis = 0;
+    for (int s = 0; s < m; s++) {
+        vis[nvis] = s;
+        nvis += lut[entry[s]] > 0;
+    }
+    const size_t sy = 2 * c->sy, sz = 2 * c->sz;
+    const size_t off[4] = {0, sy, sz, sz + sy};
+    const int *tab = (const int *)t->packed;
+    const __m256i lo16 = _mm256_set1_epi32(0xffff);
+    const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+    const __m256 dscale = _mm256_set1_ps(t->dscale), sscale = _mm256_set1_ps(t->sscale);
+    for (int i0 = 0; i0 < nvis; i0 += 8) {
+        const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
+        const int8_t *p[8];
+        for (int q = 0; q < 8; q++)
+            p[q] = c->nrm + 2 * cell[vis[i0 + (q < n8 ? q : 0)]];
+        const __m256i live =
+            _mm256_cmpgt_epi32(_mm256_set1_epi32(n8), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        const __m256i at = _mm256_blendv_epi8(_mm256_set1_epi32(vis[i0]),
+                                              _mm256_maskload_epi32(vis + i0, live), live);
+        const __m256 f0 = _mm256_i32gather_ps(fx, at, 4), f1 = _mm256_i32gather_ps(fy, at, 4);
+        const __m256 f2 = _mm256_i32gather_ps(fz, at, 4);
+        const __m256 g1 = _mm256_sub_ps(one, f1), g2 = _mm256_sub_ps(one, f2);
+        const __m256 w[4] = {_mm256_mul_ps(g1, g2), _mm256_mul_ps(f1, g2), _mm256_mul_ps(g1, f2),
+                             _mm256_mul_ps(f1, f2)};
+        __m256 d = zero, sp = zero;
+        for (int r = 0; r < 4; r++) {
+            int32_t a[8];
+            for (int q = 0; q < 8; q++)
+                memcpy(&a[q], p[q] + off[r], 4);
+            const __m256i b = _mm256_setr_epi32(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]);
+            const __m256i e0 = _mm256_i32gather_epi32(tab, _mm256_and_si256(b, lo16), 4);
+            const __m256i e1 = _mm256_i32gather_epi32(tab, _mm256_srli_epi32(b, 16), 4);
+            const __m256 d0 = _mm256_cvtepi32_ps(_mm256_and_si256(e0, lo16));
+            const __m256 d1 = _mm256_cvtepi32_ps(_mm256_and_si256(e1, lo16));
+            const __m256 s0 = _mm256_cvtepi32_ps(_mm256_srli_epi32(e0, 16));
+            const __m256 s1 = _mm256_cvtepi32_ps(_mm256_srli_epi32(e1, 16));
+            d = _mm256_fmadd_ps(_mm256_fmadd_ps(_mm256_sub_ps(d1, d0), f0, d0), w[r], d);
+            sp = _mm256_fmadd_ps(_mm256_fmadd_ps(_mm256_sub_ps(s1, s0), f0, s0), w[r], sp);
+        }
+        d = _mm256_mul_ps(d, dscale);
+        sp = _mm256_mul_ps(sp, sscale);
+        const __m256i ea = _mm256_mask_i32gather_epi32(
+            _mm256_setzero_si256(), entry, _mm256_maskload_epi32(vis + i0, live), live, 4);
+        const __m256 lm = _mm256_castsi256_ps(live);
+        const __m256 al = _mm256_mask_i32gather_ps(zero, lut, ea, lm, 4);
+        const __m256 cr = _mm256_mask_i32gather_ps(zero, lut + 1, ea, lm, 4);
+        const __m256 cg = _mm256_mask_i32gather_ps(zero, lut + 2, ea, lm, 4);
+        const __m256 cb = _mm256_mask_i32gather_ps(zero, lut + 3, ea, lm, 4);
+        const __m256 as = _mm256_mul_ps(al, sp);
+        float orr[8], org[8], orb[8], alf[8];
+        _mm256_storeu_ps(orr, _mm256_fmadd_ps(d, cr, as));
+        _mm256_storeu_ps(org, _mm256_fmadd_ps(d, cg, as));
+        _mm256_storeu_ps(orb, _mm256_fmadd_ps(d, cb, as));
+        _mm256_storeu_ps(alf, al);
+        if (*first < 0)
+            *first = vis[i0];
+        float c0 = C[0], c1 = C[1], c2 = C[2], acc = *A;
+        int q = 0, end = 0;
+        while (q < n8) {
+            const float wt = 1 - acc;
+            c0 += wt * orr[q];
+            c1 += wt * org[q];
+            c2 += wt * orb[q];
+            acc += wt * alf[q];
             q++;
             if (acc >= et) {
                 end = 1;

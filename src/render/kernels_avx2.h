@@ -5,7 +5,8 @@
  * targets x86-64 with GCC or Clang (VV_VC_HAVE_AVX2, sample.h) and chosen at
  * run time when the processor has AVX2 and FMA (vv_vc_have_avx2). Declared
  * here: the run-time test and the paths the stages' own code takes;
- * vv_vshade8 and vv_vchunk_shade8 (shade.h) and vv_vray_visible_run_avx2
+ * vv_vshade8 and vv_vchunk_shade8 (shade.h), vv_vchunk_shade8_table
+ * (shade_table.h) and vv_vray_visible_run_avx2
  * (ray.h), which the renderers call, are declared with their stages.
  * Thread-safe: they only read.
  */

@@ -450,7 +450,7 @@ test_option_errors(void **state) {
     expect_refused(r, "no_such", "1", VV_ERR_INVALID,
                    "raycast: unknown option 'no_such' (early_termination, gradient_budget_mb, "
                    "empty_space_skipping, simd, refinement, refinement_tolerance, "
-                   "preintegration)");
+                   "preintegration, shading)");
     expect_refused(r, "early_termination", "2", VV_ERR_INVALID,
                    "raycast: early_termination: '2' is not real in (0, 1]");
     expect_refused(r, "refinement", "sometimes", VV_ERR_INVALID,
