@@ -1,6 +1,7 @@
 """Helpers shared by the CLI tests of tests/io that the pinned .venv runs
-(zarr3_read_cli.py, zarr3_write_cli.py, zarr_labels_plate_cli.py): the checks and their
-summary, running volvis, and reading back a NRRD VolVis wrote."""
+(zarr3_read_cli.py, zarr3_write_cli.py, zarr_labels_plate_cli.py, the remote-store
+tests): the checks and their summary, running volvis, reading back a NRRD VolVis wrote,
+and the sharded pyramid zarr-python 3 writes."""
 import gzip
 import subprocess
 import sys
@@ -55,3 +56,40 @@ def read_nrrd(path):
     spacing = [float(np.linalg.norm(d)) for d in dirs]
     origin = [float(c) for c in h.get("space origin", "(0,0,0)").strip("()").split(",")]
     return arr, spacing, origin
+
+
+def write_stores(out, n=96, rng=None, names=("pyr3.ome.zarr", "pyr2.ome.zarr")):
+    """The stores under OUT that zarr-python 3 writes: names[0] (NGFF 0.5, Zarr v3, 3
+    levels of a ball of N^3 u16 plus noise from RNG (default: seed 7), shards of 32^3
+    holding inner chunks of 16^3, zstd) and names[1] (the same levels as Zarr v2, OME-Zarr
+    0.4, chunks of 16^3). Returns (v3 path, v2 path)."""
+    import os
+
+    import zarr
+    from zarr.codecs import ZstdCodec
+    rng = np.random.default_rng(7) if rng is None else rng
+    zz, yy, xx = np.mgrid[0:n, 0:n, 0:n].astype(np.float32)
+    ball = (1000 * np.exp(-((zz - 40) ** 2 + (yy - 50) ** 2 + (xx - 45) ** 2) / 600))
+    ball = ball.astype(np.uint16) + rng.integers(0, 50, size=ball.shape, dtype=np.uint16)
+    v3 = os.path.join(out, names[0])
+    g = zarr.open_group(v3, mode="w")
+    lv, ds = ball, []
+    for k in range(3):
+        a = g.create_array(str(k), shape=lv.shape, dtype=lv.dtype, chunks=(16, 16, 16),
+                           shards=(32, 32, 32), compressors=ZstdCodec(level=3))
+        a[:] = lv
+        ds.append({"path": str(k), "coordinateTransformations": [
+            {"type": "scale", "scale": [2.0 ** k] * 3},
+            {"type": "translation", "translation": [(2.0 ** k - 1) / 2] * 3}]})
+        s = [d // 2 * 2 for d in lv.shape]
+        lv = np.rint(lv[:s[0], :s[1], :s[2]].astype(np.float64).reshape(
+            s[0] // 2, 2, s[1] // 2, 2, s[2] // 2, 2).mean(axis=(1, 3, 5))).astype(np.uint16)
+    g.attrs["ome"] = {"version": "0.5", "multiscales": [{"axes": [
+        {"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"], "datasets": ds}]}
+    v2 = os.path.join(out, names[1])
+    g2 = zarr.open_group(v2, mode="w", zarr_format=2)
+    for k in range(3):
+        a = g[str(k)][:]
+        g2.create_array(str(k), shape=a.shape, dtype=a.dtype, chunks=(16, 16, 16))[:] = a
+    g2.attrs["multiscales"] = [{"version": "0.4", **g.attrs["ome"]["multiscales"][0]}]
+    return v3, v2

@@ -43,8 +43,8 @@ try:
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
-from cli_common import Checks, read_nrrd  # noqa: E402
-from http_common import free_port, write_stores  # noqa: E402
+from cli_common import Checks, read_nrrd, write_stores  # noqa: E402
+from http_common import free_port  # noqa: E402
 
 VOLVIS, OUT = sys.argv[1], os.path.abspath(sys.argv[2])
 shutil.rmtree(OUT, ignore_errors=True)

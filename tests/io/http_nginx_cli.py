@@ -34,8 +34,8 @@ try:
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
-from cli_common import Checks, read_nrrd  # noqa: E402
-from http_common import free_port, make_ca, wait_port, write_stores  # noqa: E402
+from cli_common import Checks, read_nrrd, write_stores  # noqa: E402
+from http_common import free_port, make_ca, wait_port  # noqa: E402
 
 NGINX = shutil.which("nginx") or ("/usr/sbin/nginx" if os.path.exists("/usr/sbin/nginx") else None)
 if not NGINX:

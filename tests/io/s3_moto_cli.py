@@ -35,8 +35,8 @@ try:
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv with moto[server])")
     sys.exit(77)
-from cli_common import Checks  # noqa: E402
-from http_common import free_port, wait_port, write_stores  # noqa: E402
+from cli_common import Checks, write_stores  # noqa: E402
+from http_common import free_port, wait_port  # noqa: E402
 
 VOLVIS, OUT = sys.argv[1], os.path.abspath(sys.argv[2])
 shutil.rmtree(OUT, ignore_errors=True)

@@ -47,7 +47,7 @@ except ImportError as e:  # pragma: no cover
     sys.exit(77)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_common import Checks, read_nrrd, run  # noqa: E402
+from cli_common import Checks, read_nrrd, run, write_stores  # noqa: E402
 
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
 shutil.rmtree(OUT, ignore_errors=True)
@@ -311,32 +311,8 @@ if nz:
           f"ngff-zarr 0.5: spacing and origin ({spacing}, {origin})")
 
 # ---- a sharded pyramid out of core ------------------------------------------------------------
-N = 96
-zz, yy, xx = np.mgrid[0:N, 0:N, 0:N].astype(np.float32)
-ball = (1000 * np.exp(-((zz - 40) ** 2 + (yy - 50) ** 2 + (xx - 45) ** 2) / 600)).astype(np.uint16)
-ball += rng.integers(0, 50, size=ball.shape, dtype=np.uint16)
-path = os.path.join(OUT, "pyramid.ome.zarr")
-g = zarr.open_group(path, mode="w")
-lv, ds = ball, []
-for k in range(3):
-    a = g.create_array(str(k), shape=lv.shape, dtype=lv.dtype, chunks=(16, 16, 16),
-                       shards=(32, 32, 32), compressors=ZstdCodec(level=3))
-    a[:] = lv
-    ds.append({"path": str(k), "coordinateTransformations": [
-        {"type": "scale", "scale": [2.0 ** k] * 3},
-        {"type": "translation", "translation": [(2.0 ** k - 1) / 2] * 3}]})
-    s = [d // 2 * 2 for d in lv.shape]
-    lv = np.rint(lv[:s[0], :s[1], :s[2]].astype(np.float64).reshape(
-        s[0] // 2, 2, s[1] // 2, 2, s[2] // 2, 2).mean(axis=(1, 3, 5))).astype(np.uint16)
-g.attrs["ome"] = {"version": "0.5", "multiscales": [{"axes": [
-    {"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"], "datasets": ds}]}
-# the same levels as Zarr v2 (OME-Zarr 0.4, unsharded): the reader VolVis had
-v2 = os.path.join(OUT, "pyramid_v2.ome.zarr")
-g2 = zarr.open_group(v2, mode="w", zarr_format=2)
-for k in range(3):
-    a = g[str(k)][:]
-    g2.create_array(str(k), shape=a.shape, dtype=a.dtype, chunks=(16, 16, 16))[:] = a
-g2.attrs["multiscales"] = [{"version": "0.4", **g.attrs["ome"]["multiscales"][0]}]
+# and the same levels as Zarr v2 (OME-Zarr 0.4, unsharded): the reader VolVis had
+path, v2 = write_stores(OUT, 96, rng, ("pyramid.ome.zarr", "pyramid_v2.ome.zarr"))
 mem, ooc, ooc2 = (os.path.join(OUT, f"pyr_{x}.png") for x in ("mem", "ooc", "ooc_v2"))
 how = ["--size", "128x128", "--mode", "mip", "--tf", "50:1000"]
 p1 = volvis("render", path, "-o", mem, *how, "--set", "refinement=off")
