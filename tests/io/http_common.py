@@ -51,3 +51,17 @@ def make_ca(d):
     ossl("x509", "-req", "-in", csr, "-CA", ca, "-CAkey", ca_key, "-CAcreateserial",
          "-out", crt, "-days", "2", "-extfile", ext)
     return ca, crt, key
+
+
+def setup(n=96):
+    """A remote-store test's start: (volvis, OUT made empty, its Checks, OUT/www holding
+    the stores of cli_common.write_stores at N^3, the v3 store's path, the v2 store's)
+    from the command line VOLVIS OUT."""
+    from cli_common import Checks, write_stores
+    volvis, out = sys.argv[1], os.path.abspath(sys.argv[2])
+    shutil.rmtree(out, ignore_errors=True)
+    os.makedirs(out)
+    www = os.path.join(out, "www")
+    os.makedirs(www)
+    v3, v2 = write_stores(www, n=n)
+    return volvis, out, Checks(), www, v3, v2

@@ -28,7 +28,6 @@ output file, a bounded time, and a peak RSS of every volvis run under 400 MB.
 """
 import http.server
 import os
-import shutil
 import socketserver
 import subprocess
 import sys
@@ -43,16 +42,10 @@ try:
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
-from cli_common import Checks, read_nrrd, write_stores  # noqa: E402
-from http_common import free_port  # noqa: E402
+from cli_common import read_nrrd  # noqa: E402
+from http_common import free_port, setup  # noqa: E402
 
-VOLVIS, OUT = sys.argv[1], os.path.abspath(sys.argv[2])
-shutil.rmtree(OUT, ignore_errors=True)
-os.makedirs(OUT)
-check = Checks()
-www = os.path.join(OUT, "www")
-os.makedirs(www)
-v3, _ = write_stores(www, n=64)
+VOLVIS, OUT, check, www, v3, _ = setup(n=64)
 
 
 def gzip_bomb(n=1 << 30):

@@ -34,21 +34,15 @@ try:
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
-from cli_common import Checks, read_nrrd, write_stores  # noqa: E402
-from http_common import free_port, make_ca, wait_port  # noqa: E402
+from cli_common import read_nrrd  # noqa: E402
+from http_common import free_port, make_ca, setup, wait_port  # noqa: E402
 
 NGINX = shutil.which("nginx") or ("/usr/sbin/nginx" if os.path.exists("/usr/sbin/nginx") else None)
 if not NGINX:
     print("skipped: nginx is missing (apt-get install nginx-light)")
     sys.exit(77)
 
-VOLVIS, OUT = sys.argv[1], os.path.abspath(sys.argv[2])
-shutil.rmtree(OUT, ignore_errors=True)
-os.makedirs(OUT)
-check = Checks()
-www = os.path.join(OUT, "www")
-os.makedirs(www)
-v3, v2 = write_stores(www)
+VOLVIS, OUT, check, www, v3, v2 = setup()
 ca, crt, key = make_ca(OUT)
 port, sport = free_port(), free_port()
 log = os.path.join(OUT, "access.log")

@@ -22,7 +22,6 @@ Checked, with AWS_ENDPOINT_URL naming the server:
 - an absent store: one line naming it.
 """
 import os
-import shutil
 import subprocess
 import sys
 import time
@@ -35,16 +34,9 @@ try:
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv with moto[server])")
     sys.exit(77)
-from cli_common import Checks, write_stores  # noqa: E402
-from http_common import free_port, wait_port  # noqa: E402
+from http_common import free_port, setup, wait_port  # noqa: E402
 
-VOLVIS, OUT = sys.argv[1], os.path.abspath(sys.argv[2])
-shutil.rmtree(OUT, ignore_errors=True)
-os.makedirs(OUT)
-check = Checks()
-www = os.path.join(OUT, "www")
-os.makedirs(www)
-v3, _ = write_stores(www, n=64)
+VOLVIS, OUT, check, www, v3, _ = setup(n=64)
 port = free_port()
 endpoint = f"http://127.0.0.1:{port}"
 senv = dict(os.environ, INITIAL_NO_AUTH_ACTION_COUNT="4", MOTO_ALLOW_NONEXISTENT_REGION="1")
