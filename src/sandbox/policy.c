@@ -72,6 +72,39 @@ sbx_profile_before_lockdown(void) {
         __llvm_profile_set_dumped();
 }
 
+/* Read access beneath each of the @p nd folders @p dirs (opened with
+ * O_PATH | @p flags; the first @p required of them must open, the others
+ * may be missing) added to ruleset @p rs, which then restricts this
+ * process; @p rs is closed. Returns 0, or -1 with errno. */
+static int
+restrict_reads(int rs, char (*dirs)[SBX_MAX_PATH], int nd, int flags, int required) {
+    int ok = 1;
+    for (int i = 0; i < nd && ok; i++) {
+        struct landlock_path_beneath_attr pb = {0};
+        pb.allowed_access = LANDLOCK_ACCESS_FS_READ_FILE | LANDLOCK_ACCESS_FS_READ_DIR;
+        pb.parent_fd = open(dirs[i], O_PATH | O_CLOEXEC | flags);
+        if (pb.parent_fd < 0) {
+            ok = i >= required;
+            continue;
+        }
+        if (syscall(SYS_landlock_add_rule, rs, LANDLOCK_RULE_PATH_BENEATH, &pb, 0) != 0)
+            ok = 0;
+        close(pb.parent_fd);
+    }
+    if (ok && syscall(SYS_landlock_restrict_self, rs, 0) != 0)
+        ok = 0;
+    int e = errno;
+    close(rs);
+    errno = e;
+    return ok ? 0 : -1;
+}
+
+/* The file-system accesses Landlock's ABI @p abi handles: all it knows. */
+static uint64_t
+handled_fs(long abi) {
+    return abi >= 5 ? 0xffffULL : abi >= 3 ? 0x7fffULL : abi >= 2 ? 0x3fffULL : 0x1fffULL;
+}
+
 /* A first Landlock layer from $VOLVIS_SANDBOX_BENEATH (a folder: `volvis
  * serve` sets its --root): reads beneath it (and the memory cgroup's
  * files) only, whatever path the request names. Layers intersect, so the
@@ -93,25 +126,7 @@ beneath_layer(uint64_t handled) {
     snprintf(dirs[nd++], sizeof dirs[0], "%s", root);
     if (vv_memory_cgroup_root(dirs[nd], sizeof dirs[nd]))
         nd++;
-    int ok = 1;
-    for (int i = 0; i < nd && ok; i++) {
-        struct landlock_path_beneath_attr pb = {0};
-        pb.allowed_access = LANDLOCK_ACCESS_FS_READ_FILE | LANDLOCK_ACCESS_FS_READ_DIR;
-        pb.parent_fd = open(dirs[i], O_PATH | O_DIRECTORY | O_CLOEXEC);
-        if (pb.parent_fd < 0) {
-            ok = i > 0; /* the root must exist; the cgroup may not */
-            break;
-        }
-        if (syscall(SYS_landlock_add_rule, rs, LANDLOCK_RULE_PATH_BENEATH, &pb, 0) != 0)
-            ok = 0;
-        close(pb.parent_fd);
-    }
-    if (ok && syscall(SYS_landlock_restrict_self, rs, 0) != 0)
-        ok = 0;
-    int e = errno;
-    close(rs);
-    errno = e;
-    return ok ? 0 : -1;
+    return restrict_reads(rs, dirs, nd, O_DIRECTORY, 1);
 }
 
 /* Read access beneath the folder of @p path (the folder itself when it is
@@ -124,16 +139,10 @@ sbx_landlock_restrict(const char *path) {
     long abi = syscall(SYS_landlock_create_ruleset, NULL, 0, LANDLOCK_CREATE_RULESET_VERSION);
     if (abi < 1)
         return -1;
-    if (beneath_layer(abi >= 5   ? 0xffffULL
-                      : abi >= 3 ? 0x7fffULL
-                      : abi >= 2 ? 0x3fffULL
-                                 : 0x1fffULL) != 0)
+    if (beneath_layer(handled_fs(abi)) != 0)
         return -1;
     struct sbx_landlock_ruleset_attr ra = {0};
-    ra.handled_access_fs = abi >= 5   ? 0xffffULL
-                           : abi >= 3 ? 0x7fffULL
-                           : abi >= 2 ? 0x3fffULL
-                                      : 0x1fffULL;
+    ra.handled_access_fs = handled_fs(abi);
     if (abi >= 4)
         ra.handled_access_net = LANDLOCK_ACCESS_NET_BIND_TCP | LANDLOCK_ACCESS_NET_CONNECT_TCP;
     if (abi >= 6)
@@ -167,23 +176,7 @@ sbx_landlock_restrict(const char *path) {
         nd++;
     }
     free(real);
-    int ok = 1;
-    for (int i = 0; i < nd && ok; i++) {
-        struct landlock_path_beneath_attr pb = {0};
-        pb.allowed_access = LANDLOCK_ACCESS_FS_READ_FILE | LANDLOCK_ACCESS_FS_READ_DIR;
-        pb.parent_fd = open(dirs[i], O_PATH | O_CLOEXEC);
-        if (pb.parent_fd < 0)
-            continue;
-        if (syscall(SYS_landlock_add_rule, rs, LANDLOCK_RULE_PATH_BENEATH, &pb, 0) != 0)
-            ok = 0;
-        close(pb.parent_fd);
-    }
-    if (ok && syscall(SYS_landlock_restrict_self, rs, 0) != 0)
-        ok = 0;
-    int e = errno;
-    close(rs);
-    errno = e;
-    return ok ? 0 : -1;
+    return restrict_reads(rs, dirs, nd, 0, 0);
 }
 
 /* The system calls a reader needs to read files it may open, compute with
