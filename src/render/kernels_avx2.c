@@ -263,6 +263,36 @@ oct_decode8(__m256i u, __m256i v, __m256 *x, __m256 *y, __m256 *z) {
     *z = _mm256_mul_ps(fz, r);
 }
 
+/* Composites @p n shaded samples (colour orr, org, orb; opacity alf) front
+ * to back into C and *A, one at a time, in order (so that the image does
+ * not depend on which samples share a vector), the sums in locals rather
+ * than through the pointers, which may alias the arrays; *shaded counts
+ * them. 1 once the opacity reaches @p et (the rest are not used). */
+static inline int
+composite8(const float *orr, const float *org, const float *orb, const float *alf, int n, float et,
+           float C[3], float *A, uint32_t *shaded) {
+    float c0 = C[0], c1 = C[1], c2 = C[2], acc = *A;
+    int q = 0, end = 0;
+    while (q < n) {
+        const float w = 1 - acc;
+        c0 += w * orr[q];
+        c1 += w * org[q];
+        c2 += w * orb[q];
+        acc += w * alf[q];
+        q++;
+        if (acc >= et) {
+            end = 1;
+            break;
+        }
+    }
+    C[0] = c0;
+    C[1] = c1;
+    C[2] = c2;
+    *A = acc;
+    *shaded += (uint32_t)q;
+    return end;
+}
+
 /* vv_vcache_gradient_at of eight samples (cells cell[vis[q]], fractions
  * fx, fy, fz at vis[q]; lanes past n8 repeat the first), one lane a
  * sample: each of the cells' four x-pairs of octahedral codes decoded
@@ -353,29 +383,7 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
         _mm256_storeu_ps(alf, al);
         if (*first < 0)
             *first = vis[i0];
-        /* one at a time, in order (so that the image does not depend on
-         * which samples share a vector), the sums in locals rather than
-         * through the pointers, which may alias the arrays */
-        float c0 = C[0], c1 = C[1], c2 = C[2], acc = *A;
-        int q = 0, end = 0;
-        while (q < n8) {
-            const float w = 1 - acc;
-            c0 += w * orr[q];
-            c1 += w * org[q];
-            c2 += w * orb[q];
-            acc += w * alf[q];
-            q++;
-            if (acc >= et) {
-                end = 1;
-                break;
-            }
-        }
-        C[0] = c0;
-        C[1] = c1;
-        C[2] = c2;
-        *A = acc;
-        *shaded += (uint32_t)q;
-        if (end)
+        if (composite8(orr, org, orb, alf, n8, et, C, A, shaded))
             return 1;
     }
     return 0;
@@ -448,26 +456,7 @@ vv_vchunk_shade8_table(const vv_vcache *c, const float *lut, const vv_vshade_tab
         _mm256_storeu_ps(alf, al);
         if (*first < 0)
             *first = vis[i0];
-        float c0 = C[0], c1 = C[1], c2 = C[2], acc = *A;
-        int q = 0, end = 0;
-        while (q < n8) {
-            const float wt = 1 - acc;
-            c0 += wt * orr[q];
-            c1 += wt * org[q];
-            c2 += wt * orb[q];
-            acc += wt * alf[q];
-            q++;
-            if (acc >= et) {
-                end = 1;
-                break;
-            }
-        }
-        C[0] = c0;
-        C[1] = c1;
-        C[2] = c2;
-        *A = acc;
-        *shaded += (uint32_t)q;
-        if (end)
+        if (composite8(orr, org, orb, alf, n8, et, C, A, shaded))
             return 1;
     }
     return 0;
