@@ -537,9 +537,9 @@ cache_evict(void) {
         if (ln < 6 || ln >= 64 || strcmp(e->d_name + ln - 5, ".vvhc"))
             continue;
         char p[4200];
-        snprintf(p, sizeof p, "%s/%s", cfg.cache_dir, e->d_name);
         struct stat st;
-        if (stat(p, &st) != 0)
+        if (snprintf(p, sizeof p, "%s/%s", cfg.cache_dir, e->d_name) >= (int)sizeof p ||
+            stat(p, &st) != 0)
             continue;
         if (k == cap) {
             cap = cap ? cap * 2 : 256;
@@ -550,7 +550,7 @@ cache_evict(void) {
         }
         v[k].t = st.st_mtime;
         v[k].n = (uint64_t)st.st_size;
-        snprintf(v[k].name, sizeof v[k].name, "%s", e->d_name);
+        memcpy(v[k].name, e->d_name, ln + 1); /* ln < 64: checked above */
         total += v[k++].n;
     }
     closedir(d);
