@@ -202,7 +202,9 @@ typedef struct vv_load_options {
     /**
      * 1: the process ends after this read (the reader sandbox): checks that
      * exist only to keep a long-lived process from a library's leaks on a
-     * malformed file may be skipped. 0 (the default) everywhere else.
+     * malformed file may be skipped, and a reader may leave the volume's
+     * value range unset (0, 0): the parent measures it again, as it trusts
+     * no range the reader sends. 0 (the default) everywhere else.
      */
     int one_shot;
 } vv_load_options;

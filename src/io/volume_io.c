@@ -15,6 +15,7 @@
 #include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
+#include "volvis/sys/sandbox.h"
 
 void
 vv_load_options_init(vv_load_options *o) {
@@ -136,8 +137,19 @@ slices_unsupported(const char *path, const vv_format_record *r) {
                         vv_path_basename(path), r->title);
 }
 
+static vv_status volume_load(vv_volume **out, const char *path, const vv_load_options *opt);
+
 vv_status
 vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
+    vv_status s = volume_load(out, path, opt);
+    /* the next reader is started once this load is done with the voxels
+     * (its range measured included): its start takes no core from them */
+    vv_sandbox_after_load();
+    return s;
+}
+
+static vv_status
+volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "load: NULL argument");
     *out = NULL;

@@ -258,6 +258,28 @@ refill_spare(const char *exe) {
     pthread_mutex_unlock(&spare_lock);
 }
 
+/* The reader a volume load left to start after it (vv_sandbox_after_load):
+ * its program, "" when none is owed. Under spare_lock. */
+static char owed_exe[PATH_MAX];
+
+static void
+owe_spare(const char *exe) {
+    pthread_mutex_lock(&spare_lock);
+    snprintf(owed_exe, sizeof owed_exe, "%s", exe);
+    pthread_mutex_unlock(&spare_lock);
+}
+
+void
+vv_sandbox_after_load(void) {
+    char exe[PATH_MAX];
+    pthread_mutex_lock(&spare_lock);
+    snprintf(exe, sizeof exe, "%s", owed_exe);
+    owed_exe[0] = 0;
+    pthread_mutex_unlock(&spare_lock);
+    if (exe[0])
+        refill_spare(exe);
+}
+
 void
 vv_sandbox_release_spare(void) {
     pthread_mutex_lock(&spare_lock);
@@ -509,11 +531,17 @@ vv_sandbox_call_reader(const vv_sandbox_call *c, vv_sandbox_result *ans) {
     while ((n = send(sock, rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
         ;
     free(rq);
-    /* a process's second load and later ones start the next reader while
-     * this one reads (most programs that load once never load again: the
-     * CLI's spare would only take a core from this load) */
-    if (atomic_fetch_add(&loads_started, 1) > 0)
-        refill_spare(exe);
+    /* a process's second load and later ones start the next reader (most
+     * programs that load once never load again: the CLI's spare would only
+     * take a core): a volume's once its load is done with the voxels
+     * (vv_sandbox_after_load), where it takes no core from the read; the
+     * other ops' while this one reads */
+    if (atomic_fetch_add(&loads_started, 1) > 0) {
+        if (op == VV_SANDBOX_VOLUME)
+            owe_spare(exe);
+        else
+            refill_spare(exe);
+    }
 
     sbx_reply *r = malloc(sizeof *r);
     int result = 0, timed_out = 0, malformed = 0, status = 0;

@@ -57,6 +57,36 @@ sbx_madvise_parallel(void *p, size_t len, int advice) {
     }
 }
 
+/*
+ * The parent's one pass over a volume's mapping [@p p, @p p + @p bytes):
+ * each 8 MiB piece populated (MADV_POPULATE_READ) and its voxels of type
+ * @p type measured into @p range (vv_range_accumulate) on the same
+ * thread, the pieces on the library's threads: the range it trusts no
+ * reader for, at the cost of one parallel pass instead of two.
+ */
+static void
+populate_and_range(void *p, size_t bytes, vv_voxel_type type, double range[2]) {
+    const size_t piece = (size_t)8 << 20, es = vv_voxel_type_size(type);
+    const int64_t n = (int64_t)((bytes + piece - 1) / piece);
+    range[0] = INFINITY;
+    range[1] = -INFINITY;
+#pragma omp parallel if (n > 1)
+    {
+        double mine[2] = {INFINITY, -INFINITY};
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < n; i++) {
+            const size_t off = (size_t)i * piece, len = bytes - off < piece ? bytes - off : piece;
+            (void)madvise((char *)p + off, len, MADV_POPULATE_READ);
+            vv_range_accumulate(type, (const char *)p + off, len / es, mine);
+        }
+#pragma omp critical(sbx_volume_range)
+        {
+            range[0] = mine[0] < range[0] ? mine[0] : range[0];
+            range[1] = mine[1] > range[1] ? mine[1] : range[1];
+        }
+    }
+}
+
 /* ---- the reader ----------------------------------------------------------------- */
 
 /* The voxels of the volumes the reader makes: each in its own memfd. */
@@ -291,8 +321,9 @@ sbx_volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *f
     void *p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE, fd, 0);
     int e = errno;
     close(fd);
-    if (p != MAP_FAILED)
-        sbx_madvise_parallel(p, len, MADV_POPULATE_READ);
+    double range[2] = {0, 0};
+    if (p != MAP_FAILED && bytes)
+        populate_and_range(p, (size_t)bytes, (vv_voxel_type)r->type, range);
     if (p == MAP_FAILED)
         return vv_error_set(VV_ERR_NOMEM, "%s: %s: cannot map the reader's %llu bytes: %s",
                             fmt_name, file, (unsigned long long)bytes, strerror(e));
@@ -303,6 +334,7 @@ sbx_volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *f
         munmap(p, len);
         return s;
     }
+    vv_volume_set_range(v, range);
     memcpy(v->spacing, r->spacing, sizeof v->spacing);
     memcpy(v->origin, r->origin, sizeof v->origin);
     memcpy(v->direction, r->direction, sizeof v->direction);

@@ -200,7 +200,9 @@ int sbx_mesh_memfd(const vv_mesh *m, uint64_t *bytes);
 /** A new memfd holding @p g as sbx_grid_head lays it out; -1 on failure. */
 int sbx_grid_memfd(const vv_grid *g, uint64_t *bytes);
 
-/** The parent's checked decoders; each owns @p fd (closed or mapped and closed). */
+/** The parent's checked decoders; each owns @p fd (closed or mapped and closed). A
+ * volume's value range is measured here, over the mapped voxels, in the pass that
+ * populates the mapping (no range a reader sends is trusted). */
 vv_status sbx_volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *name,
                                 const char *file);
 vv_status sbx_mesh_from_reply(vv_mesh **out, const sbx_reply *r, int fd, const char *name,

@@ -135,6 +135,16 @@ vv_status vv_sandbox_open_store(const vv_sandbox_call *c, vv_store *st,
                                 unsigned char info[VV_SANDBOX_INFO_MAX], size_t *info_len);
 
 /**
+ * Starts the reader for the next read that a volume read (op
+ * VV_SANDBOX_VOLUME, a process's second and later) left to be started
+ * after it: vv_volume_load calls it once it is done with the voxels, so
+ * that the start (dynamic linking, GDCM's dictionary: tens of ms of a
+ * core) takes no core from the read. Does nothing when none is owed.
+ * Thread-safe.
+ */
+void vv_sandbox_after_load(void);
+
+/**
  * Stops the reader started ahead for the next read (one is kept,
  * process-wide), for tests that count child processes and for a program
  * that wants none left idle. Thread-safe.

@@ -865,18 +865,21 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
     const int zero[3] = {0, 0, 0};
-    /* the value range measured as the chunks are copied (no pass after) */
+    /* the value range measured as the chunks are copied (no pass after);
+     * not at all in the reader sandbox (one_shot), whose parent trusts no
+     * range it is sent and measures the voxels again */
     double range[2] = {INFINITY, -INFINITY};
+    const int want_range = !opt->one_shot;
 #pragma omp parallel num_threads(nthreads)
     {
         unsigned char *buf = malloc(J.cbytes);
         double mine[2] = {INFINITY, -INFINITY};
 #pragma omp for schedule(dynamic, 1)
         for (long long L = 0; L < (long long)n_spatial; L++) {
-            vv_status cs =
-                buf ? vv_zr_copy_chunk(&J, (uint64_t)L, buf, v->data, zero, dims, NULL, NULL, mine)
-                    : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
-                                   J.cbytes);
+            vv_status cs = buf ? vv_zr_copy_chunk(&J, (uint64_t)L, buf, v->data, zero, dims, NULL,
+                                                  NULL, want_range ? mine : NULL)
+                               : vv_error_set(VV_ERR_NOMEM,
+                                              "out of memory for a chunk of %zu bytes", J.cbytes);
             if (cs != VV_OK) {
 #pragma omp critical(vv_zarr_err)
                 if (first < 0 || L < first) {
@@ -898,7 +901,8 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
         return vv_error_set(first_status, "%s", first_msg);
     }
     vv_zr_geometry(&J, v);
-    vv_volume_set_range(v, range);
+    if (want_range)
+        vv_volume_set_range(v, range);
     if (info) {
         info->n_channels = (int)nc;
         info->n_levels = n_levels;
