@@ -18,7 +18,8 @@ timing (all read from the page cache). Every reader's voxel sum is compared:
 a reader that reads other voxels fails the run. Prints the anchor lines of
 ../shared/BENCHMARKS.md and the ratios volvis / peer (time of the peer over
 VolVis's: above 1, VolVis is faster), in wall seconds and in CPU seconds
-(the process's, all threads: what a loaded machine distorts least).
+(the process's, all threads, and for VolVis its reader processes too:
+what a loaded machine distorts least).
 """
 import argparse
 import os
