@@ -20,7 +20,7 @@ with `moving: false`. It reads every frame as it arrives. Measured, per run
   anchor=volvis op=serve_encode_share        JPEG encoding's share of a drag frame's server time
                                              (render + encode), %
   anchor=volvis op=serve_encode_ms           JPEG encoding of a drag frame, ms (libjpeg-turbo; the
-                                             8-bit pixels come from the render's tiles, vv_pixels8)
+                                             YUV 4:2:0 planes come from the render's tiles, vv_pixels8)
   anchor=volvis op=serve_full_frame_ms       the full frame's render time (server's)
 
 Targets (issue 63, CT head at 1000 x 800 on 2 cores): >= 20 frames a second,

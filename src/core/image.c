@@ -1,5 +1,7 @@
 /* RGBA float + depth images (see volvis/image.h). */
 #include <math.h>
+#include <pthread.h>
+#include <stdint.h>
 #include <stdlib.h>
 
 #include "volvis/image.h"
@@ -84,6 +86,78 @@ vv_image_rect_to_rgbx8(const vv_image *img, int x0, int y0, int x1, int y1, uint
             v = v > 0 ? v : 0;
             v = v < 255 ? v : 255;
             b[i] = (uint8_t)v;
+        }
+    }
+}
+
+/*
+ * libjpeg's RGB -> YCbCr (jccolor.c): JFIF's full-range BT.601 in 16-bit
+ * fixed point, Y rounded by 1/2, Cb and Cr by 1/2 - epsilon, with its
+ * tables of each coefficient times 0..255 (a table lookup a term is
+ * cheaper than a multiply here, and the fastest of the scalar, float and
+ * vectorized forms measured); then Cb and Cr averaged over 2 x 2 pixels
+ * with a bias of 1 and 2 in turn along the row (jcsample.c's
+ * h2v2_downsample).
+ */
+#define YCC_FIX(x) ((int32_t)((x)*65536.0 + 0.5))
+#define YCC_HALF ((int32_t)1 << 15)
+#define YCC_CBCR_OFFSET ((int32_t)128 << 16)
+enum { YCC_R_Y, YCC_G_Y, YCC_B_Y, YCC_R_CB, YCC_G_CB, YCC_B_CB, YCC_G_CR, YCC_B_CR, YCC_TABLES };
+static int32_t ycc_tab[YCC_TABLES][256]; /* R -> Cr is B -> Cb's */
+static pthread_once_t ycc_once = PTHREAD_ONCE_INIT;
+
+static void
+ycc_init(void) {
+    for (int32_t i = 0; i < 256; i++) {
+        ycc_tab[YCC_R_Y][i] = YCC_FIX(0.29900) * i;
+        ycc_tab[YCC_G_Y][i] = YCC_FIX(0.58700) * i;
+        ycc_tab[YCC_B_Y][i] = YCC_FIX(0.11400) * i + YCC_HALF;
+        ycc_tab[YCC_R_CB][i] = -YCC_FIX(0.16874) * i;
+        ycc_tab[YCC_G_CB][i] = -YCC_FIX(0.33126) * i;
+        ycc_tab[YCC_B_CB][i] = YCC_FIX(0.50000) * i + YCC_CBCR_OFFSET + YCC_HALF - 1;
+        ycc_tab[YCC_G_CR][i] = -YCC_FIX(0.41869) * i;
+        ycc_tab[YCC_B_CR][i] = -YCC_FIX(0.08131) * i;
+    }
+}
+
+/* a component as vv_image_rect_to_rgbx8's byte */
+static inline int
+ycc_q8(float v) {
+    float t = v * 255.0f + 0.5f;
+    t = t > 0 ? t : 0;
+    t = t < 255 ? t : 255;
+    return (int)t;
+}
+
+void
+vv_image_rect_to_yuv420(const vv_image *img, int x0, int y0, int x1, int y1, uint8_t *yuv) {
+    const int W = img->width, H = img->height;
+    if (x0 < 0 || y0 < 0 || ((x0 | y0) & 1) || x1 > W || y1 > H || x1 <= x0 || y1 <= y0 ||
+        ((x1 & 1) && x1 != W) || ((y1 & 1) && y1 != H))
+        return;
+    pthread_once(&ycc_once, ycc_init);
+    const int32_t(*T)[256] = (const int32_t(*)[256])ycc_tab;
+    const size_t pw = (size_t)(W + (W & 1)), ph = (size_t)(H + (H & 1)), cw = pw / 2;
+    uint8_t *const py = yuv, *const pcb = yuv + pw * ph, *const pcr = pcb + cw * (ph / 2);
+    const int xe = x1 + (x1 & 1); /* the padding column too, at an odd right edge */
+    for (int y = y0; y < y1; y += 2) {
+        const float *a0 = img->rgba + 4 * (size_t)W * (size_t)y;
+        const float *a1 = img->rgba + 4 * (size_t)W * (size_t)(y + 1 < H ? y + 1 : y);
+        uint8_t *l0 = py + pw * (size_t)y, *l1 = l0 + pw; /* an odd last row repeats */
+        uint8_t *cb = pcb + cw * (size_t)(y / 2), *cr = pcr + cw * (size_t)(y / 2);
+        for (int x = x0; x < xe; x += 2) {
+            const size_t i = 4 * (size_t)x, j = 4 * (size_t)(x + 1 < W ? x + 1 : x);
+            const float *p[4] = {a0 + i, a0 + j, a1 + i, a1 + j};
+            uint8_t *out[4] = {l0 + x, l0 + x + 1, l1 + x, l1 + x + 1};
+            int32_t sb = 1 + ((x >> 1) & 1), sr = sb; /* the bias */
+            for (int k = 0; k < 4; k++) {
+                const int r = ycc_q8(p[k][0]), g = ycc_q8(p[k][1]), b = ycc_q8(p[k][2]);
+                *out[k] = (uint8_t)((T[YCC_R_Y][r] + T[YCC_G_Y][g] + T[YCC_B_Y][b]) >> 16);
+                sb += (T[YCC_R_CB][r] + T[YCC_G_CB][g] + T[YCC_B_CB][b]) >> 16;
+                sr += (T[YCC_B_CB][r] + T[YCC_G_CR][g] + T[YCC_B_CR][b]) >> 16;
+            }
+            cb[x >> 1] = (uint8_t)(sb >> 2);
+            cr[x >> 1] = (uint8_t)(sr >> 2);
         }
     }
 }

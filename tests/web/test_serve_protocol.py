@@ -19,9 +19,14 @@ Checks, each on the real binary:
     changing its colour changes the frame; a 4-D NIfTI of 3 time steps
     (nibabel) has the time slider's 3 steps, and a step changes the frame;
   - --cert/--key (a self-signed certificate made with openssl): HTTPS answers
-    200 with the token and 403 without, and a frame arrives over WSS.
+    200 with the token and 403 without, and a frame arrives over WSS;
+  - the frames' JPEG (encoded from the render's YUV 4:2:0 planes) at an odd
+    size, 999 x 799, and the drag's reduced frames decode (PIL) to their
+    header's size, and the still frame is within 48 dB of PIL's own JPEG of
+    the view's PNG (RGB, 4:2:0, the same quality), as close to the PNG as it.
 
-usage: test_serve_protocol.py VOLVIS_BINARY DATA_DIR
+usage: test_serve_protocol.py VOLVIS_BINARY DATA_DIR [CHECK]
+  CHECK: run only the checks whose title contains this text
 Exits 77 (skipped) when python3-websockets or PIL is missing.
 """
 import asyncio, json, os, shutil, ssl, struct, subprocess, sys, tempfile, time
@@ -37,6 +42,7 @@ except ImportError as e:
     sys.exit(SKIP)
 
 BIN, DATA = sys.argv[1], sys.argv[2]
+ONLY = sys.argv[3] if len(sys.argv) > 3 else ""
 TIMEOUT = 180  # seconds for any one wait, on a loaded 2-core machine
 
 
@@ -173,6 +179,8 @@ def main():
 
     def check(name, fn):
         nonlocal failures
+        if ONLY not in name:
+            return
         t0 = time.time()
         try:
             fn()
@@ -401,6 +409,53 @@ def main():
         finally:
             srv.stop()
 
+    def yuv_frames():
+        import io
+
+        def decode(jpeg):
+            return np.asarray(Image.open(io.BytesIO(jpeg)).convert("RGB")).astype(float)
+
+        def psnr(a, b):
+            mse = np.mean((a - b) ** 2)
+            return float("inf") if mse == 0 else 10 * np.log10(255.0 ** 2 / mse)
+
+        srv = Server([head])
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 999, "height": 799}))
+                    await until(ws, sharp, "first sharp frame")
+                    for i in range(1, 6):
+                        await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 5,
+                                                  "dy": 3, "seq": i, "moving": True}))
+                        await asyncio.sleep(0.02)
+                    await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 5,
+                                              "dy": 3, "seq": 6, "moving": False}))
+                    frames = []
+                    while True:
+                        k, h, p = await until(ws, lambda k, h, p: k == "FRME", "frame")
+                        frames.append((h, p))
+                        if h["sharp"] and h["input_seq"] == 6:
+                            break
+                    return frames, await png_of(ws)
+            frames, png = asyncio.run(run())
+        finally:
+            srv.stop()
+        for h, p in frames:  # every frame, reduced ones of odd sides included
+            img = decode(p)
+            assert img.shape == (h["height"], h["width"], 3), (img.shape, h)
+        h, frame = frames[-1]
+        assert (h["width"], h["height"]) == (999, 799), h
+        view = Image.open(io.BytesIO(png)).convert("RGB")
+        ref = io.BytesIO()  # libjpeg's encoder from RGB, as tjCompress2 of RGBX was
+        view.save(ref, "JPEG", quality=h["quality"], subsampling=2)
+        ours, theirs, exact = decode(frame), decode(ref.getvalue()), np.asarray(view).astype(float)
+        between, to_ours, to_theirs = psnr(ours, theirs), psnr(ours, exact), psnr(theirs, exact)
+        print(f"  999 x 799 at quality {h['quality']}: {between:.1f} dB between the two "
+              f"JPEGs; to the PNG {to_ours:.1f} dB (YUV planes), {to_theirs:.1f} dB (PIL)")
+        assert between >= 48, between
+        assert to_ours >= to_theirs - 0.5, (to_ours, to_theirs)
+
     check("drag and PNG in memory equal volvis render of the saved session", in_memory)
     check("out of core: progressive still frames, PNG equals volvis render", out_of_core)
     check("mpirun -n 2: the PNG within 2 levels of one process", mpi)
@@ -409,6 +464,7 @@ def main():
     check("channels (OME-TIFF) and time steps (4-D NIfTI)", channels_and_time)
     check("--cert/--key: HTTPS, 403 without the token, frames over WSS", tls)
     check("the slice window of ch2better.nii.gz spans its brain", foreground_window)
+    check("JPEG from YUV 4:2:0 planes at 999 x 799: decodes, within 48 dB of RGB's", yuv_frames)
     if failures == 0:
         shutil.rmtree(tmp, ignore_errors=True)
     else:
