@@ -831,9 +831,10 @@ expect_rgbx(const vv_image *img, const uint8_t *rgbx) {
     }
 }
 
-static void
-test_pixels8(void **state) {
-    (void)state;
+/* The 8-bit frames' volume: a ball of 24 x 20 x 16 u8 voxels, 250 at its
+ * centre falling to 0 at radius 9 (the caller frees it). */
+static vv_volume *
+pixels8_ball(void) {
     vv_volume *v = NULL;
     const int dims[3] = {24, 20, 16};
     vt_ok(vv_volume_new(&v, dims, VV_U8));
@@ -846,6 +847,13 @@ test_pixels8(void **state) {
                 d[(k * 20 + j) * 24 + i] = (unsigned char)(r < 9 ? 250 - 25 * r : 0);
             }
     vv_volume_update_range(v);
+    return v;
+}
+
+static void
+test_pixels8(void **state) {
+    (void)state;
+    vv_volume *v = pixels8_ball();
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);
     o.mode = VV_MODE_COMPOSITE;
@@ -1088,18 +1096,7 @@ test_pixels8_yuv420(void **state) {
         vv_image_free(img);
     }
     /* renders: the ray caster's tiles convert, the others after the frame */
-    vv_volume *v = NULL;
-    const int dims[3] = {24, 20, 16};
-    vt_ok(vv_volume_new(&v, dims, VV_U8));
-    unsigned char *d = v->data;
-    for (int k = 0; k < 16; k++)
-        for (int j = 0; j < 20; j++)
-            for (int i = 0; i < 24; i++) {
-                double r =
-                    sqrt((i - 12.0) * (i - 12.0) + (j - 10.0) * (j - 10.0) + (k - 8.0) * (k - 8.0));
-                d[(k * 20 + j) * 24 + i] = (unsigned char)(r < 9 ? 250 - 25 * r : 0);
-            }
-    vv_volume_update_range(v);
+    vv_volume *v = pixels8_ball();
     const int views[][2] = {{71, 45}, {64, 48}};
     for (int s = 0; s < 2; s++) {
         vv_default_scene_options o;
