@@ -29,85 +29,27 @@ usage: test_serve_protocol.py VOLVIS_BINARY DATA_DIR [CHECK]
   CHECK: run only the checks whose title contains this text
 Exits 77 (skipped) when python3-websockets or PIL is missing.
 """
-import asyncio, json, os, shutil, ssl, struct, subprocess, sys, tempfile, time
+import asyncio, functools, json, os, shutil, ssl, subprocess, sys, tempfile, time
 import urllib.error, urllib.request
 
-SKIP = 77
+import serve_client  # exits 77 without python3-websockets
+
 try:
-    import websockets
     import numpy as np
     from PIL import Image
 except ImportError as e:
     print(f"skipped: {e}")
-    sys.exit(SKIP)
+    sys.exit(serve_client.SKIP)
 
 BIN, DATA = sys.argv[1], sys.argv[2]
 ONLY = sys.argv[3] if len(sys.argv) > 3 else ""
 TIMEOUT = 180  # seconds for any one wait, on a loaded 2-core machine
-
-
-class Server:
-    def __init__(self, args, mpi=0):
-        cmd = [BIN, "serve", "--port", "0"] + args
-        env = None
-        if mpi:
-            cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n",
-                   str(mpi)] + cmd
-            # no X display for mpirun or the ranks: Open MPI's hwloc probes the X
-            # servers :0 to :9 for GPUs otherwise (docs/parallel.md)
-            env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
-            env["HWLOC_COMPONENTS"] = "-gl"
-        self.mpi = mpi
-        self.log = tempfile.TemporaryFile(mode="w+")
-        self.p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=self.log, text=True,
-                                  env=env)
-        line = self.p.stdout.readline().strip()
-        if not line.startswith("http"):
-            self.log.seek(0)
-            raise SystemExit(f"server did not start: {cmd}\n{self.log.read()}")
-        self.base, self.token = line.split("/?token=")
-
-    def connect(self, context=None):
-        host = self.base.split("//", 1)[1]
-        scheme = "wss" if context else "ws"
-        return websockets.connect(f"{scheme}://{host}/ws", subprotocols=["volvis"],
-                                  origin=self.base, ssl=context,
-                                  extra_headers={"Cookie": "volvis_token=" + self.token},
-                                  max_size=1 << 27)
-
-    def stop(self):
-        self.p.terminate()
-        try:
-            self.p.wait(30)
-        except subprocess.TimeoutExpired:
-            self.p.kill()
-        # Ctrl-C and SIGTERM end the server with status 0; mpirun, which signals every
-        # rank itself, reports the signal
-        self.log.seek(0)
-        log = self.log.read()
-        for bad in ("Sanitizer", "runtime error:"):  # ASan, LSan, UBSan, TSan reports
-            assert bad not in log, log[-4000:]
-        assert self.mpi or self.p.returncode in (0, -15), (self.p.returncode, log[-2000:])
-
-
-def parse(m):
-    n = struct.unpack("<I", m[4:8])[0]
-    return m[:4].decode(), json.loads(m[8:8 + n]), m[8 + n:]
+Server = functools.partial(serve_client.Server, BIN)
 
 
 async def until(ws, pred, what):
     """Reads messages until pred(kind, header, payload) is true; returns that message."""
-    deadline = time.time() + TIMEOUT
-    while time.time() < deadline:
-        m = await asyncio.wait_for(ws.recv(), TIMEOUT)
-        if isinstance(m, str):
-            j = json.loads(m)
-            r = ("TEXT", j, None)
-        else:
-            r = parse(m)
-        if pred(*r):
-            return r
-    raise AssertionError(f"no {what} within {TIMEOUT} s")
+    return await serve_client.until(ws, pred, what, TIMEOUT)
 
 
 def sharp(k, h, p):
@@ -136,22 +78,29 @@ def pixels(png_bytes, path):
     return np.asarray(Image.open(path)).astype(int)
 
 
+async def drag(ws, width=320, height=256):
+    """hello with a view of @width x @height, its first sharp frame, a drag of 10
+    rotations, a zoom that stops (input 11); returns every frame after the first,
+    (header, JPEG), to the sharp frame of input 11."""
+    await ws.send(json.dumps({"type": "hello", "width": width, "height": height}))
+    await until(ws, sharp, "first sharp frame")
+    for i in range(1, 11):
+        await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6, "dy": 2,
+                                  "seq": i, "moving": True}))
+        await asyncio.sleep(0.02)
+    await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2, "seq": 11,
+                              "moving": False}))
+    frames = []
+    while True:
+        k, h, p = await until(ws, lambda k, h, p: k == "FRME", "frame")
+        frames.append((h, p))
+        if h["sharp"] and h["input_seq"] == 11:
+            return frames
+
+
 async def drag_and_png(srv, root, name, cli_extra=(), steps_expected=False):
     async with srv.connect() as ws:
-        await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
-        k, h, _ = await until(ws, sharp, "first sharp frame")
-        for i in range(1, 11):
-            await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6, "dy": 2,
-                                      "seq": i, "moving": True}))
-            await asyncio.sleep(0.02)
-        await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2, "seq": 11,
-                                  "moving": False}))
-        frames = []
-        while True:
-            k, h, p = await until(ws, lambda k, h, p: k == "FRME", "frame")
-            frames.append(h)
-            if h["sharp"] and h["input_seq"] == 11:
-                break
+        frames = [h for h, _ in await drag(ws)]
         reduced = [f for f in frames if f["kind"] != "full"]
         seqs = [f["input_seq"] for f in frames]
         assert seqs == sorted(seqs), seqs  # never an older input after a newer one
@@ -227,16 +176,7 @@ def main():
                                                         "moving": True}))
                         await gone.send(json.dumps({"type": "png"}))
                 async with srv.connect() as ws:
-                    await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
-                    await until(ws, sharp, "first sharp frame")
-                    for i in range(1, 11):
-                        await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6,
-                                                  "dy": 2, "seq": i, "moving": True}))
-                        await asyncio.sleep(0.02)
-                    await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2,
-                                              "seq": 11, "moving": False}))
-                    await until(ws, lambda k, h, p: sharp(k, h, p) and h["input_seq"] == 11,
-                                "sharp frame of the last input")
+                    await drag(ws)
                     return await png_of(ws)
             ranks = pixels(asyncio.run(run()), os.path.join(root, "mpi_page.png"))
             diff = np.abs(ranks - one)
@@ -423,20 +363,7 @@ def main():
         try:
             async def run():
                 async with srv.connect() as ws:
-                    await ws.send(json.dumps({"type": "hello", "width": 999, "height": 799}))
-                    await until(ws, sharp, "first sharp frame")
-                    for i in range(1, 6):
-                        await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 5,
-                                                  "dy": 3, "seq": i, "moving": True}))
-                        await asyncio.sleep(0.02)
-                    await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 5,
-                                              "dy": 3, "seq": 6, "moving": False}))
-                    frames = []
-                    while True:
-                        k, h, p = await until(ws, lambda k, h, p: k == "FRME", "frame")
-                        frames.append((h, p))
-                        if h["sharp"] and h["input_seq"] == 6:
-                            break
+                    frames = await drag(ws, 999, 799)
                     return frames, await png_of(ws)
             frames, png = asyncio.run(run())
         finally:
