@@ -765,8 +765,10 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
     vv_pixels8 *p8 = opt->pixels8;
     if (p8 &&
         (p8->format == VV_PIXELS8_YUV420 ? !p8->yuv : p8->format != VV_PIXELS8_RGBX || !p8->rgbx))
-        return vv_error_set(VV_ERR_INVALID, "render: 8-bit pixels of format %d with no buffer",
-                            p8->format);
+        return vv_error_set(VV_ERR_INVALID,
+                            "render: 8-bit pixels of format %d: no buffer for it, or no such "
+                            "format (%d RGBX, %d YUV 4:2:0)",
+                            p8->format, VV_PIXELS8_RGBX, VV_PIXELS8_YUV420);
     if (p8 && (p8->width != view->width || p8->height != view->height))
         return vv_error_set(VV_ERR_INVALID,
                             "render: 8-bit pixels of %d x %d but the view is %d x %d", p8->width,
