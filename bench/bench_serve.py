@@ -20,8 +20,12 @@ with `moving: false`. It reads every frame as it arrives. Measured, per run
   anchor=volvis op=serve_encode_share        JPEG encoding's share of a drag frame's server time
                                              (render + encode), %
   anchor=volvis op=serve_encode_ms           JPEG encoding of a drag frame, ms (libjpeg-turbo; the
-                                             8-bit pixels come from the render's tiles, vv_pixels8)
+                                             YUV 4:2:0 planes come from the render's tiles, vv_pixels8)
   anchor=volvis op=serve_full_frame_ms       the full frame's render time (server's)
+
+A comment line before them gives the mean render and encode times of a drag
+frame and the encoding by kind of frame (the reduced sizes the server picks
+move with the machine's load, and with them the mean).
 
 Targets (issue 63, CT head at 1000 x 800 on 2 cores): >= 20 frames a second,
 p50 <= 60 ms, p95 <= 100 ms, sharp <= 400 ms after the drag stops, <= 3 Mbit/s,
@@ -115,6 +119,11 @@ async def drag(url, size, seconds):
         "encode": 100 * encode / (render + encode) if render + encode > 0 else float("nan"),
         "full_ms": sharp[0][1]["render_ms"] if sharp else full_ms,
         "kinds": sorted({f[1]["kind"] for f in drag_frames}),
+        # a drag frame's encoding by kind (the reduced sizes the load picks differ)
+        "encode_by_kind": {k: (statistics.mean(f[1]["encode_ms"] for f in drag_frames
+                                               if f[1]["kind"] == k),
+                               sum(1 for f in drag_frames if f[1]["kind"] == k))
+                           for k in sorted({f[1]["kind"] for f in drag_frames})},
         "render_ms": render / max(1, len(drag_frames)),
         "encode_ms": encode / max(1, len(drag_frames)),
     }
@@ -163,7 +172,9 @@ def main():
         r = run(cmd, size, a.drag)
         tag = f"dataset={dataset}_{size[0]}x{size[1]} ranks={ranks}"
         print(f"# ranks {ranks}: drag frames drawn as {', '.join(r['kinds'])}; mean render "
-              f"{r['render_ms']:.2f} ms, encode {r['encode_ms']:.2f} ms a frame")
+              f"{r['render_ms']:.2f} ms, encode {r['encode_ms']:.2f} ms a frame ("
+              + ", ".join(f"{k} {ms:.3f} ms x {n}" for k, (ms, n) in r["encode_by_kind"].items())
+              + ")")
         for op, key, unit in (("serve_drag_fps", "fps", "fps"),
                               ("serve_input_to_frame_p50", "p50", "ms"),
                               ("serve_input_to_frame_p95", "p95", "ms"),

@@ -97,6 +97,18 @@ vt_cache(uint64_t limit) {
     return c;
 }
 
+char *
+vt_mkdtemp(char *buf, size_t n, const char *prefix) {
+    const char *tmp = getenv("TMPDIR");
+    if (!tmp || !*tmp || (size_t)snprintf(buf, n, "%s/%sXXXXXX", tmp, prefix) >= n)
+        tmp = "/tmp";
+    if ((size_t)snprintf(buf, n, "%s/%sXXXXXX", tmp, prefix) >= n) {
+        errno = ENAMETOOLONG;
+        return NULL;
+    }
+    return mkdtemp(buf);
+}
+
 const char *
 vt_outdir(const char *name) {
     static char buf[1024];

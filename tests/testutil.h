@@ -69,6 +69,15 @@ const char *vt_data(const char *rel);
 const char *vt_outdir(const char *name);
 
 /**
+ * Makes a new private directory @p prefix followed by six random
+ * characters under $TMPDIR (under /tmp when TMPDIR is unset, empty, or
+ * too long for @p n bytes, as a socket's short path may need), writes its
+ * path into @p buf (@p n bytes) and returns @p buf; NULL when it cannot
+ * be made (errno set). The caller removes it.
+ */
+char *vt_mkdtemp(char *buf, size_t n, const char *prefix);
+
+/**
  * A cache of its own with a budget of @p limit bytes for the out-of-core
  * readers a test opens (freed when the test program ends); NULL for 0:
  * the process's cache (1 GiB).

@@ -59,6 +59,21 @@ void vv_image_clear(vv_image *img, float r, float g, float b, float a);
 void vv_image_rect_to_rgbx8(const vv_image *img, int x0, int y0, int x1, int y1, uint8_t *out);
 
 /**
+ * Rows @p y0 <= y < @p y1, columns @p x0 <= x < @p x1 of @p img as JPEG's
+ * YUV 4:2:0 planes (vv_pixels8's VV_PIXELS8_YUV420 layout, the whole
+ * image's): @p yuv holds Y (pw x ph bytes, pw and ph the image's sides
+ * rounded up to even), then Cb and Cr (pw/2 x ph/2 each). Each component
+ * is first made 8-bit as vv_image_rect_to_rgbx8 does, then transformed
+ * and subsampled as libjpeg(-turbo)'s compressor does (JFIF full-range
+ * BT.601 in 16-bit fixed point, 2 x 2 chroma averages with bias 1, 2, 1,
+ * 2, ... along a row; the odd last column or row repeated into the
+ * padding). @p x0 and @p y0 must be even, @p x1 and @p y1 even or the
+ * image's sides (where the padding is written too); other rectangles are
+ * ignored. Thread-safe for disjoint rectangles; does no allocation.
+ */
+void vv_image_rect_to_yuv420(const vv_image *img, int x0, int y0, int x1, int y1, uint8_t *yuv);
+
+/**
  * Converts to 8-bit, @p channels per pixel (3: RGB, 4: RGBA), rows top to
  * bottom, into @p out (width * height * channels bytes, caller-owned).
  * gamma <= 0 is taken as 1.

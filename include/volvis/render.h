@@ -115,23 +115,55 @@ void vv_lod_init(vv_lod *lod);
 
 #define VV_SOURCES_MAX 16 /**< visible volume objects out of core one frame draws */
 
+/** vv_pixels8.format: the layout of a render's 8-bit frame. */
+typedef enum vv_pixels8_format {
+    VV_PIXELS8_RGBX = 0,   /**< 4 bytes a pixel, R G B and alpha */
+    VV_PIXELS8_YUV420 = 1, /**< JPEG's Y, Cb and Cr planes, chroma 2 x 2 subsampled */
+} vv_pixels8_format;
+
 /**
  * Where a render also writes its frame as 8-bit pixels (`volvis serve`'s
- * JPEG input): RGBX, 4 bytes a pixel, rows top to bottom, width * 4 bytes
- * a row, each component of the float image as (uint8)(clamp(v * 255 +
- * 0.5, 0, 255)) (gamma 1; X is the alpha). The buffer is the caller's
- * (4 * width * height bytes, width and height those of the view). A
- * renderer whose tiles write final pixels converts each tile on the
- * worker thread that drew it, while the tile is in that core's cache (the
- * frame runner's `image`); for the others vv_renderer_render converts the
- * finished image. Either way, after a successful render the buffer holds
- * the frame and `converted_in_tiles` says which way it went.
+ * JPEG input), rows top to bottom, each component of the float image as
+ * (uint8)(clamp(v * 255 + 0.5, 0, 255)) (gamma 1), in one of two layouts:
+ *
+ * - VV_PIXELS8_RGBX (0, the default): `rgbx`, 4 bytes a pixel, width * 4
+ *   bytes a row; X is the alpha.
+ * - VV_PIXELS8_YUV420: `yuv`, the planes TurboJPEG's
+ *   tjCompressFromYUVPlanes takes for TJSAMP_420 with NULL strides, one
+ *   after the other (vv_pixels8_bytes): Y of pw x ph bytes, then Cb, then
+ *   Cr, each pw/2 x ph/2, where pw and ph are width and height rounded up
+ *   to even (the odd last column or row repeated, as libjpeg pads). The
+ *   8-bit R, G, B go through JPEG/JFIF's full-range BT.601 transform in
+ *   libjpeg's 16-bit fixed point (Y = 0.299 R + 0.587 G + 0.114 B, Cb =
+ *   128 - 0.16874 R - 0.33126 G + 0.5 B, Cr = 128 + 0.5 R - 0.41869 G -
+ *   0.08131 B) and Cb, Cr are averaged over 2 x 2 pixels with libjpeg's
+ *   alternating bias: the planes are the bytes tjEncodeYUVPlanes makes of
+ *   the RGBX frame, so the JPEG is the one tjCompress2 makes of it, without
+ *   the encoder's colour pass. Alpha is dropped.
+ *
+ * The buffer is the caller's, of the view's width and height. A renderer
+ * whose tiles write final pixels converts each tile on the worker thread
+ * that drew it, while the tile is in that core's cache (the frame runner's
+ * `image`; YUV needs tiles of even sides); for the others
+ * vv_renderer_render converts the finished image. Either way, after a
+ * successful render the buffer holds the frame and `converted_in_tiles`
+ * says which way it went. Zero-initialised fields mean RGBX.
  */
 typedef struct vv_pixels8 {
-    uint8_t *rgbx;          /**< 4 * width * height bytes, the caller's */
+    uint8_t *rgbx;          /**< RGBX: 4 * width * height bytes, the caller's */
     int width, height;      /**< its size, pixels: the view's */
     int converted_in_tiles; /**< out: 1 by the tiles that drew them, 0 after the frame */
+    int format;             /**< vv_pixels8_format */
+    uint8_t *yuv;           /**< YUV420: vv_pixels8_bytes bytes, the caller's */
 } vv_pixels8;
+
+/**
+ * The bytes of an 8-bit frame of @p width x @p height pixels in @p format
+ * (vv_pixels8_format): 4 w h for RGBX; pw ph + 2 (pw/2)(ph/2) for YUV420,
+ * pw and ph the sides rounded up to even. 0 for an unknown format or a
+ * side < 1. Thread-safe.
+ */
+size_t vv_pixels8_bytes(int format, int width, int height);
 
 /** Options of one render call. */
 typedef struct vv_render_options {

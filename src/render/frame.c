@@ -89,13 +89,17 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
     int done = 0;
     vv_status failed = VV_OK;
     char message[1024] = "";
-    /* 8-bit pixels tile by tile: the caller's image, whole, of the buffer's size */
+    /* 8-bit pixels tile by tile: the caller's image, whole, of the buffer's
+     * size; YUV 4:2:0 when no tile splits a 2 x 2 block (even tile sides) */
     vv_pixels8 *p8 = opt->pixels8;
     const int whole = rx0 == 0 && ry0 == 0 && rx1 == W && ry1 == H;
-    uint8_t *rgbx = job->image && p8 && p8->rgbx && whole && job->image->width == W &&
-                            job->image->height == H && p8->width == W && p8->height == H
-                        ? p8->rgbx
-                        : NULL;
+    const int of_image = job->image && p8 && whole && job->image->width == W &&
+                         job->image->height == H && p8->width == W && p8->height == H;
+    uint8_t *rgbx = of_image && p8->format == VV_PIXELS8_RGBX ? p8->rgbx : NULL;
+    uint8_t *yuv = of_image && p8->format == VV_PIXELS8_YUV420 && (ts % 2 == 0 || ts >= W) &&
+                           (th % 2 == 0 || th >= H)
+                       ? p8->yuv
+                       : NULL;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
     for (int tile = 0; tile < ntiles; tile++) {
         if (atomic_load_explicit(&stop, memory_order_relaxed))
@@ -128,6 +132,8 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
             }
             if (rgbx)
                 vv_image_rect_to_rgbx8(job->image, t.x0, t.y0, t.x1, t.y1, rgbx);
+            else if (yuv)
+                vv_image_rect_to_yuv420(job->image, t.x0, t.y0, t.x1, t.y1, yuv);
         }
         if (opt->progress.fn) {
 #pragma omp critical(vv_frame_progress)
@@ -143,7 +149,7 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
         return vv_error_set(failed, "%s", message[0] ? message : "a tile failed");
     if (atomic_load(&stop))
         return vv_error_set(VV_ERR_CANCELLED, "cancelled");
-    if (rgbx)
+    if (rgbx || yuv)
         p8->converted_in_tiles = 1;
     return VV_OK;
 }

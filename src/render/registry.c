@@ -713,13 +713,37 @@ proxies_in_memory(const vv_world *w, vv_world **out) {
     return s;
 }
 
-/* @p img as 8-bit RGBX in p8 (vv_pixels8's conversion), rows on @p threads threads. */
+size_t
+vv_pixels8_bytes(int format, int width, int height) {
+    if (width < 1 || height < 1)
+        return 0;
+    const size_t pw = (size_t)width + (size_t)(width & 1),
+                 ph = (size_t)height + (size_t)(height & 1);
+    switch (format) {
+    case VV_PIXELS8_RGBX:
+        return 4 * (size_t)width * (size_t)height;
+    case VV_PIXELS8_YUV420:
+        return pw * ph + 2 * (pw / 2) * (ph / 2);
+    default:
+        return 0;
+    }
+}
+
+/* @p img in 8 bits in p8 (vv_pixels8's conversion, its format), rows (pairs
+ * of rows for YUV 4:2:0) on @p threads threads. */
 static void
 pixels8_of(const vv_image *img, vv_pixels8 *p8, int threads) {
     const int nt = threads > 0 ? threads : vv_threads_get();
+    const int W = img->width, H = img->height;
+    if (p8->format == VV_PIXELS8_YUV420) {
 #pragma omp parallel for schedule(static) num_threads(nt)
-    for (int y = 0; y < img->height; y++)
-        vv_image_rect_to_rgbx8(img, 0, y, img->width, y + 1, p8->rgbx);
+        for (int y = 0; y < H; y += 2)
+            vv_image_rect_to_yuv420(img, 0, y, W, y + 2 < H ? y + 2 : H, p8->yuv);
+        return;
+    }
+#pragma omp parallel for schedule(static) num_threads(nt)
+    for (int y = 0; y < H; y++)
+        vv_image_rect_to_rgbx8(img, 0, y, W, y + 1, p8->rgbx);
 }
 
 static vv_status render_method(vv_renderer *r, const vv_world *world, const vv_view *view,
@@ -739,7 +763,13 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
         return vv_error_set(VV_ERR_INVALID, "render: image is %d x %d but the view is %d x %d",
                             out->width, out->height, view->width, view->height);
     vv_pixels8 *p8 = opt->pixels8;
-    if (p8 && (!p8->rgbx || p8->width != view->width || p8->height != view->height))
+    if (p8 &&
+        (p8->format == VV_PIXELS8_YUV420 ? !p8->yuv : p8->format != VV_PIXELS8_RGBX || !p8->rgbx))
+        return vv_error_set(VV_ERR_INVALID,
+                            "render: 8-bit pixels of format %d: no buffer for it, or no such "
+                            "format (%d RGBX, %d YUV 4:2:0)",
+                            p8->format, VV_PIXELS8_RGBX, VV_PIXELS8_YUV420);
+    if (p8 && (p8->width != view->width || p8->height != view->height))
         return vv_error_set(VV_ERR_INVALID,
                             "render: 8-bit pixels of %d x %d but the view is %d x %d", p8->width,
                             p8->height, view->width, view->height);

@@ -423,7 +423,9 @@ class FakeSpacenavd(threading.Thread):
 
 def defect_10():
     path = head_scene()
-    sockdir = tempfile.mkdtemp(prefix="vvspnav-", dir="/tmp")
+    # $TMPDIR unless it is too long for a socket's path (sun_path: 108 bytes)
+    tmp = tempfile.gettempdir()
+    sockdir = tempfile.mkdtemp(prefix="vvspnav-", dir=tmp if len(tmp) <= 64 else "/tmp")
     sock = os.path.join(sockdir, "spnav.sock")
     daemon = FakeSpacenavd(sock)
     daemon.start()

@@ -39,8 +39,8 @@ temp_socket(const char *name) {
     static char path[96];
     char *dir = socket_dir();
     if (!dir[0]) {
-        snprintf(dir, 64, "/tmp/vv-input-XXXXXX");
-        assert_non_null(mkdtemp(dir));
+        /* a socket's path is short: $TMPDIR when it leaves room, else /tmp */
+        assert_non_null(vt_mkdtemp(dir, 41, "vv-input-"));
     }
     snprintf(path, sizeof path, "%.40s/%.40s", dir, name);
     return path;

@@ -79,8 +79,8 @@ setup(void **state) {
         return 0;
     }
     g_have_gdcmconv = system("gdcmconv --version >/dev/null 2>&1") == 0;
-    char tmpl[] = "/tmp/vv_dicom_XXXXXX";
-    if (!mkdtemp(tmpl))
+    char tmpl[sizeof g_dir];
+    if (!vt_mkdtemp(tmpl, sizeof tmpl, "vv_dicom_"))
         return -1;
     snprintf(g_dir, sizeof g_dir, "%s", tmpl);
     const char *script = VV_SOURCE_DIR "/scripts/dicom_testdata.py";

@@ -116,8 +116,8 @@ static void
 test_credentials(void **state) {
     (void)state;
     clear_aws();
-    char dir[] = "/tmp/vv_remote_XXXXXX";
-    assert_non_null(mkdtemp(dir));
+    char dir[1024];
+    assert_non_null(vt_mkdtemp(dir, sizeof dir, "vv_remote_"));
     setenv("HOME", dir, 1);
     bs_target t;
     assert_int_equal(bs_target_parse(&t, "s3://b/k", NULL, NULL), VV_OK);

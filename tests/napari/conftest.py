@@ -3,32 +3,17 @@ build (PYTHONPATH from CTest, else build/<preset>/python), the CLI, the
 real volumes of ../shared/data, and a .vvb made from one by volvis convert."""
 import os
 import pathlib
-import shutil
 import subprocess
 import sys
 
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+# the Python tests' build_tree (tests/python): where this build's package and CLI are
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "python"))
+from build_tree import ROOT, cli, use_build_package  # noqa: E402
+
 DATA = ROOT / ".." / "shared" / "data" / "volumes"
-
-if not any(pathlib.Path(p, "volvis", "napari").exists() for p in sys.path if p):
-    for preset in ("release", "asan", "debug"):
-        cand = ROOT / "build" / preset / "python"
-        if (cand / "volvis" / "napari").exists():
-            sys.path.insert(0, str(cand))
-            break
-
-
-def cli():
-    env = os.environ.get("VV_CLI")
-    if env and os.path.exists(env):
-        return env
-    for preset in ("release", "asan", "debug"):
-        p = ROOT / "build" / preset / "volvis"
-        if p.exists():
-            return str(p)
-    return shutil.which("volvis")
+use_build_package("napari")
 
 
 @pytest.fixture(scope="session")

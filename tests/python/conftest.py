@@ -5,23 +5,18 @@ PYTHONPATH=build/release/python /usr/bin/python3 -m pytest tests/python
 """
 import os
 import pathlib
-import shutil
-import sys
 
 import numpy as np
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+from build_tree import ROOT, cli  # noqa: F401 (cli: the tests' import of it)
+from build_tree import use_build_package
+
 DATA = ROOT.parent / "shared" / "data"
 if not DATA.exists():
     DATA = ROOT / ".." / "shared" / "data"
 
-if not any(pathlib.Path(p, "volvis").exists() for p in sys.path if p):
-    for preset in ("release", "asan", "debug"):
-        cand = ROOT / "build" / preset / "python"
-        if (cand / "volvis").exists():
-            sys.path.insert(0, str(cand))
-            break
+use_build_package()
 
 import volvis  # noqa: E402
 
@@ -33,18 +28,6 @@ if os.environ.get("VV_EXPECT_PREFIX"):
         raise RuntimeError("volvis imported from %s, not from %s" % (volvis.__file__, _want))
 
 SANITIZER = bool(os.environ.get("VV_SANITIZER"))
-
-
-def cli():
-    """The volvis CLI of this build (VV_CLI from CTest, else the tree's)."""
-    env = os.environ.get("VV_CLI")
-    if env and os.path.exists(env):
-        return env
-    for preset in ("release", "asan", "debug"):
-        p = ROOT / "build" / preset / "volvis"
-        if p.exists():
-            return str(p)
-    return shutil.which("volvis")
 
 
 @pytest.fixture

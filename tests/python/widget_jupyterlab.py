@@ -29,43 +29,26 @@ import tempfile
 import time
 import urllib.request
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-HEAD = ROOT.parent / "shared" / "data" / "volumes" / "ct_head.nrrd"
-args = sys.argv[1:]
-PYDIR = pathlib.Path(args[0] if args else ROOT / "build" / "release" / "python").resolve()
-OUT = pathlib.Path(args[1] if len(args) > 1 else
-                   ROOT / "build" / "release" / "test-out" / "widget_jupyterlab").resolve()
+import widget_setup
+from widget_setup import HEAD
+
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 CHROMEDRIVER = shutil.which("chromedriver") or "/usr/bin/chromedriver"
-
-
-def skip(why):
-    print("widget_jupyterlab: skipped: %s" % why)
-    sys.exit(77)
-
-
-try:
-    import anywidget  # noqa: F401
-    import jupyterlab  # noqa: F401
-    import nbformat
-    from selenium import webdriver
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
-    from selenium.webdriver.common.action_chains import ActionChains
-    from selenium.webdriver.common.actions import interaction
-    from selenium.webdriver.common.actions.action_builder import ActionBuilder
-    from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
-    from selenium.webdriver.common.by import By
-    from selenium.webdriver.common.keys import Keys
-    from selenium.webdriver.support.ui import Select
-except ImportError as e:
-    skip("%s (bash scripts/install-deps.sh test makes .venv)" % e)
-if not (os.path.exists(CHROMIUM) and os.path.exists(CHROMEDRIVER)):
-    skip("chromium or chromedriver is missing (apt-get install chromium chromium-driver)")
-if not HEAD.exists():
-    skip("%s is missing" % HEAD)
-if not (PYDIR / "volvis" / "widgets.py").exists():
-    skip("the Python package was not built in %s" % PYDIR)
+PYDIR, OUT, _ = widget_setup.start(
+    "widget_jupyterlab", ["anywidget", "jupyterlab", "nbformat", "selenium.webdriver"],
+    extra_skip=lambda: None if os.path.exists(CHROMIUM) and os.path.exists(CHROMEDRIVER) else
+    "chromium or chromedriver is missing (apt-get install chromium chromium-driver)")
+import nbformat  # noqa: E402
+from selenium import webdriver  # noqa: E402
+from selenium.webdriver.chrome.options import Options  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
+from selenium.webdriver.common.actions import interaction  # noqa: E402
+from selenium.webdriver.common.actions.action_builder import ActionBuilder  # noqa: E402
+from selenium.webdriver.common.actions.wheel_input import ScrollOrigin  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.common.keys import Keys  # noqa: E402
+from selenium.webdriver.support.ui import Select  # noqa: E402
 
 failures = []
 

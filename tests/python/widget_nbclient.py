@@ -12,34 +12,19 @@ nbformat, ipykernel or anywidget is missing."""
 import hashlib
 import json
 import os
-import pathlib
 import sys
 import tempfile
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-HEAD = ROOT.parent / "shared" / "data" / "volumes" / "ct_head.nrrd"
-args = sys.argv[1:]
-PYDIR = pathlib.Path(args[0] if args else ROOT / "build" / "release" / "python").resolve()
-OUT = pathlib.Path(args[1]) if len(args) > 1 else ROOT / "build" / "release" / "test-out" / \
-    "widget_nbclient"
+import widget_setup
+from widget_setup import HEAD
 
-try:
-    import anywidget  # noqa: F401
-    import ipykernel  # noqa: F401
-    import nbformat
-    import numpy as np
-    from nbclient import NotebookClient
-except ImportError as e:
-    print("widget_nbclient: skipped: %s (bash scripts/install-deps.sh test makes .venv)" % e)
-    sys.exit(77)
-if not HEAD.exists():
-    print("widget_nbclient: skipped: %s is missing" % HEAD)
-    sys.exit(77)
-if not (PYDIR / "volvis" / "widgets.py").exists():
-    print("widget_nbclient: skipped: the Python package was not built in %s" % PYDIR)
-    sys.exit(77)
-sys.path.insert(0, str(PYDIR))
+PYDIR, OUT, _ = widget_setup.start("widget_nbclient",
+                                   ["anywidget", "ipykernel", "nbformat", "numpy", "nbclient"])
+import nbformat  # noqa: E402
+import numpy as np  # noqa: E402
+from nbclient import NotebookClient  # noqa: E402
+
 import volvis  # noqa: E402
 
 EYE = [120.0, -420.0, 160.0]

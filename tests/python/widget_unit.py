@@ -19,35 +19,18 @@ import io
 import json
 import math
 import os
-import pathlib
 import subprocess
 import sys
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-DATA = ROOT.parent / "shared" / "data"
-HEAD = DATA / "volumes" / "ct_head.nrrd"
+import widget_setup
+from widget_setup import HEAD, ROOT
 
-args = sys.argv[1:]
-PYDIR = pathlib.Path(args[0]) if args else ROOT / "build" / "release" / "python"
+PYDIR, OUT, args = widget_setup.start("widget_unit", ["anywidget", "numpy", "PIL"], n_args=3)
 CLI = args[1] if len(args) > 1 else str(ROOT / "build" / "release" / "volvis")
-OUT = pathlib.Path(args[2]) if len(args) > 2 else ROOT / "build" / "release" / "test-out" / \
-    "widget_unit"
+import numpy as np  # noqa: E402
+from PIL import Image  # noqa: E402
 
-try:
-    import anywidget  # noqa: F401
-    import numpy as np
-    from PIL import Image
-except ImportError as e:
-    print("widget_unit: skipped: %s (bash scripts/install-deps.sh test makes .venv)" % e)
-    sys.exit(77)
-if not HEAD.exists():
-    print("widget_unit: skipped: %s is missing" % HEAD)
-    sys.exit(77)
-if not (PYDIR / "volvis" / "widgets.py").exists():
-    print("widget_unit: skipped: the Python package was not built in %s" % PYDIR)
-    sys.exit(77)
-sys.path.insert(0, str(PYDIR))
 import volvis  # noqa: E402
 from volvis import widgets  # noqa: E402
 from volvis._lib import ffi, lib  # noqa: E402

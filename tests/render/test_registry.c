@@ -35,6 +35,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <turbojpeg.h>
 
 #include "render/registry.h"
 #include "volvis/radiosity.h"
@@ -830,9 +831,10 @@ expect_rgbx(const vv_image *img, const uint8_t *rgbx) {
     }
 }
 
-static void
-test_pixels8(void **state) {
-    (void)state;
+/* The 8-bit frames' volume: a ball of 24 x 20 x 16 u8 voxels, 250 at its
+ * centre falling to 0 at radius 9 (the caller frees it). */
+static vv_volume *
+pixels8_ball(void) {
     vv_volume *v = NULL;
     const int dims[3] = {24, 20, 16};
     vt_ok(vv_volume_new(&v, dims, VV_U8));
@@ -845,6 +847,13 @@ test_pixels8(void **state) {
                 d[(k * 20 + j) * 24 + i] = (unsigned char)(r < 9 ? 250 - 25 * r : 0);
             }
     vv_volume_update_range(v);
+    return v;
+}
+
+static void
+test_pixels8(void **state) {
+    (void)state;
+    vv_volume *v = pixels8_ball();
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);
     o.mode = VV_MODE_COMPOSITE;
@@ -891,6 +900,251 @@ test_pixels8(void **state) {
     vv_volume_free(v);
 }
 
+/* JFIF's YCbCr of 8-bit RGB in double precision, rounded (ITU-T T.871's
+ * formulas and coefficients: independent of libjpeg's fixed point) */
+static double
+jfif_clamp(double v) {
+    return v < 0 ? 0 : v > 255 ? 255 : v;
+}
+
+static void
+jfif_ycc(const int rgb[3], double ycc[3]) {
+    const double r = rgb[0], g = rgb[1], b = rgb[2];
+    ycc[0] = jfif_clamp(0.299 * r + 0.587 * g + 0.114 * b);
+    ycc[1] = jfif_clamp(128 - 0.168736 * r - 0.331264 * g + 0.5 * b);
+    ycc[2] = jfif_clamp(128 + 0.5 * r - 0.418688 * g - 0.081312 * b);
+}
+
+/* vv_image_rect_to_yuv420 of @p img, in 2-row bands (the server's
+ * fallback), into a new buffer of vv_pixels8_bytes */
+static uint8_t *
+yuv_of(const vv_image *img) {
+    size_t n = vv_pixels8_bytes(VV_PIXELS8_YUV420, img->width, img->height);
+    uint8_t *yuv = malloc(n);
+    assert_non_null(yuv);
+    memset(yuv, 0x5a, n);
+    for (int y = 0; y < img->height; y += 2)
+        vv_image_rect_to_yuv420(img, 0, y, img->width, y + 2 < img->height ? y + 2 : img->height,
+                                yuv);
+    return yuv;
+}
+
+/* The planes equal libjpeg-turbo's own conversion of the RGBX frame
+ * (tjEncodeYUV3: the colour pass and downsampling tjCompress2 does), byte
+ * for byte, layout included. */
+static void
+expect_turbojpeg_planes(const vv_image *img, const uint8_t *yuv) {
+    const int W = img->width, H = img->height;
+    uint8_t *rgbx = malloc(4 * (size_t)W * H);
+    assert_non_null(rgbx);
+    vv_image_rect_to_rgbx8(img, 0, 0, W, H, rgbx);
+    size_t n = vv_pixels8_bytes(VV_PIXELS8_YUV420, W, H);
+    assert_int_equal(n, tjBufSizeYUV2(W, 1, H, TJSAMP_420));
+    uint8_t *ref = malloc(n);
+    assert_non_null(ref);
+    tjhandle tj = tjInitCompress();
+    assert_non_null(tj);
+    assert_int_equal(tjEncodeYUV3(tj, rgbx, W, 0, H, TJPF_RGBX, ref, 1, TJSAMP_420, 0), 0);
+    tjDestroy(tj);
+    for (size_t i = 0; i < n; i++)
+        if (yuv[i] != ref[i])
+            fail_msg("%d x %d: byte %zu of %zu: %d, libjpeg-turbo %d", W, H, i, n, yuv[i], ref[i]);
+    /* the JPEG of the planes (the server's tjCompressFromYUVPlanes) is the
+     * JPEG of the RGBX (tjCompress2) when the sides are whole MCUs (16
+     * pixels); otherwise only the padding of the last MCUs differs (libjpeg
+     * pads the full-size Cb, Cr and subsamples them, TurboJPEG repeats the
+     * subsampled ones), which the quantization carries into those blocks'
+     * pixels */
+    tjhandle c = tjInitCompress(), dc = tjInitDecompress();
+    assert_true(c && dc);
+    unsigned char *ja = NULL, *jb = NULL;
+    unsigned long na = 0, nb = 0;
+    assert_int_equal(
+        tjCompress2(c, rgbx, W, 0, H, TJPF_RGBX, &ja, &na, TJSAMP_420, 60, TJFLAG_FASTDCT), 0);
+    const unsigned char *planes[3] = {yuv, yuv + tjPlaneSizeYUV(0, W, 0, H, TJSAMP_420),
+                                      yuv + tjPlaneSizeYUV(0, W, 0, H, TJSAMP_420) +
+                                          tjPlaneSizeYUV(1, W, 0, H, TJSAMP_420)};
+    assert_int_equal(
+        tjCompressFromYUVPlanes(c, planes, W, NULL, H, TJSAMP_420, &jb, &nb, 60, TJFLAG_FASTDCT),
+        0);
+    uint8_t *da = malloc(3 * (size_t)W * H), *db = malloc(3 * (size_t)W * H);
+    assert_true(da && db);
+    assert_int_equal(tjDecompress2(dc, ja, na, da, W, 0, H, TJPF_RGB, 0), 0);
+    assert_int_equal(tjDecompress2(dc, jb, nb, db, W, 0, H, TJPF_RGB, 0), 0);
+    double se = 0;
+    for (size_t i = 0; i < 3 * (size_t)W * H; i++)
+        se += ((double)da[i] - db[i]) * ((double)da[i] - db[i]);
+    double psnr = se == 0 ? INFINITY : 10 * log10(255.0 * 255.0 * 3 * W * H / se);
+    print_message(
+        "%d x %d: the JPEGs of the RGBX and of the planes %zu, %zu bytes, %.1f dB apart\n", W, H,
+        (size_t)na, (size_t)nb, psnr);
+    if (W % 16 == 0 && H % 16 == 0) { /* no padding: the same JPEG */
+        if (na != nb || memcmp(ja, jb, na) != 0)
+            fail_msg("%d x %d: whole MCUs, yet the JPEGs differ", W, H);
+    } else if (!(psnr >= 45)) /* noise in the edge blocks is the worst case */
+        fail_msg("%d x %d: the two JPEGs decode %.1f dB apart", W, H, psnr);
+    tjFree(ja);
+    tjFree(jb);
+    free(da);
+    free(db);
+    tjDestroy(c);
+    tjDestroy(dc);
+    free(ref);
+    free(rgbx);
+}
+
+/* YUV 4:2:0 (vv_pixels8's VV_PIXELS8_YUV420): analytic values of pure
+ * colours; random images of odd and even sides within rounding of the
+ * double-precision JFIF formulas and equal to libjpeg-turbo's planes;
+ * renders whose tiles convert, equal to the conversion of the frame. */
+static void
+test_pixels8_yuv420(void **state) {
+    (void)state;
+    /* pure colours, 2 x 2 pixels each: JFIF's values (Y = 0.299 R + ..., rounded;
+     * Cb, Cr = 128 + ..., rounded, 255.5 kept at 255) */
+    static const struct {
+        float rgb[3];
+        int y, cb, cr;
+    } pure[] = {
+        {{1, 1, 1}, 255, 128, 128},
+        {{0, 0, 0}, 0, 128, 128},
+        {{1, 0, 0}, 76, 85, 255},
+        {{0, 1, 0}, 150, 44, 21},
+        {{0, 0, 1}, 29, 255, 107},
+        {{0.5f, 0.5f, 0.5f}, 128, 128, 128},
+        /* Cb 128 - 127.5: libjpeg rounds by 1/2 - epsilon, so 0 (not 1) */
+        {{1, 1, 0}, 226, 0, 149},
+        {{2, -1, 0.5f}, 91, 149, 245}, /* clamped to 255, 0, 128 */
+    };
+    for (size_t c = 0; c < sizeof pure / sizeof pure[0]; c++) {
+        vv_image *img = NULL;
+        vt_ok(vv_image_new(&img, 2, 2));
+        vv_image_clear(img, pure[c].rgb[0], pure[c].rgb[1], pure[c].rgb[2], 1);
+        uint8_t *yuv = yuv_of(img);
+        for (int i = 0; i < 4; i++)
+            assert_int_equal(yuv[i], pure[c].y);
+        assert_int_equal(yuv[4], pure[c].cb);
+        assert_int_equal(yuv[5], pure[c].cr);
+        expect_turbojpeg_planes(img, yuv);
+        free(yuv);
+        vv_image_free(img);
+    }
+    assert_int_equal(vv_pixels8_bytes(VV_PIXELS8_YUV420, 999, 799), 1000 * 800 + 2 * 500 * 400);
+    assert_int_equal(vv_pixels8_bytes(VV_PIXELS8_RGBX, 3, 2), 24);
+    assert_int_equal(vv_pixels8_bytes(7, 3, 2), 0);
+    /* random images: odd and even sides, the browser's odd frame included */
+    const int sizes[][2] = {{1, 1}, {3, 5}, {16, 16}, {17, 9}, {999, 799}, {1000, 800}};
+    unsigned seed = 12345;
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+        const int W = sizes[k][0], H = sizes[k][1];
+        vv_image *img = NULL;
+        vt_ok(vv_image_new(&img, W, H));
+        for (size_t i = 0; i < 4 * (size_t)W * H; i++) {
+            seed = seed * 1103515245u + 12345u;
+            img->rgba[i] =
+                (float)((seed >> 8) & 0xffff) / 60000.0f - 0.05f; /* a little out of [0, 1] */
+        }
+        uint8_t *yuv = yuv_of(img);
+        const size_t pw = (size_t)(W + (W & 1)), ph = (size_t)(H + (H & 1));
+        const uint8_t *cb = yuv + pw * ph, *cr = cb + (pw / 2) * (ph / 2);
+        for (int y = 0; y < (int)ph; y++)
+            for (int x = 0; x < (int)pw; x++) {
+                int xs = x < W ? x : W - 1, ys = y < H ? y : H - 1; /* the padding repeats */
+                int rgb[3];
+                for (int ch = 0; ch < 3; ch++) {
+                    float v = img->rgba[4 * ((size_t)ys * W + xs) + ch];
+                    rgb[ch] = v <= 0 ? 0 : v >= 1 ? 255 : (int)floorf(v * 255.0f + 0.5f);
+                }
+                double ycc[3];
+                jfif_ycc(rgb, ycc);
+                double d = fabs(yuv[(size_t)y * pw + x] - ycc[0]);
+                if (d > 0.51)
+                    fail_msg("%d x %d: Y at (%d, %d) is %d, JFIF %.3f", W, H, x, y,
+                             yuv[(size_t)y * pw + x], ycc[0]);
+                if ((x | y) & 1)
+                    continue;
+                double sum[3] = {0, 0, 0}; /* the 2 x 2 block's mean Cb, Cr */
+                for (int dy = 0; dy < 2; dy++)
+                    for (int dx = 0; dx < 2; dx++) {
+                        int xx = x + dx < W ? x + dx : W - 1, yy = y + dy < H ? y + dy : H - 1;
+                        int p[3];
+                        for (int ch = 0; ch < 3; ch++) {
+                            float v = img->rgba[4 * ((size_t)yy * W + xx) + ch];
+                            p[ch] = v <= 0 ? 0 : v >= 1 ? 255 : (int)floorf(v * 255.0f + 0.5f);
+                        }
+                        double c[3];
+                        jfif_ycc(p, c);
+                        sum[1] += c[1] / 4;
+                        sum[2] += c[2] / 4;
+                    }
+                /* libjpeg rounds each pixel's Cb, Cr, then the mean, biased: within 1 */
+                size_t ci = (size_t)(y / 2) * (pw / 2) + (size_t)(x / 2);
+                if (fabs(cb[ci] - sum[1]) > 1.05 || fabs(cr[ci] - sum[2]) > 1.05)
+                    fail_msg("%d x %d: Cb, Cr at (%d, %d) are %d, %d; JFIF %.3f, %.3f", W, H, x, y,
+                             cb[ci], cr[ci], sum[1], sum[2]);
+            }
+        expect_turbojpeg_planes(img, yuv);
+        /* a rectangle that would split a 2 x 2 block is ignored */
+        if (W > 2 && H > 2) {
+            const uint8_t flipped = (uint8_t)(yuv[1] ^ 0xff);
+            yuv[1] = flipped;
+            vv_image_rect_to_yuv420(img, 1, 0, W, H, yuv);
+            vv_image_rect_to_yuv420(img, 0, 0, 1, 2, yuv);
+            assert_int_equal(yuv[1], flipped);
+        }
+        free(yuv);
+        vv_image_free(img);
+    }
+    /* renders: the ray caster's tiles convert, the others after the frame */
+    vv_volume *v = pixels8_ball();
+    const int views[][2] = {{71, 45}, {64, 48}};
+    for (int s = 0; s < 2; s++) {
+        vv_default_scene_options o;
+        vv_default_scene_options_init(&o);
+        o.mode = VV_MODE_COMPOSITE;
+        o.width = views[s][0];
+        o.height = views[s][1];
+        vv_world *w = NULL;
+        vt_ok(vv_world_new_for_volume(&w, v, &o));
+        vv_image *img = NULL;
+        vt_ok(vv_image_new(&img, o.width, o.height));
+        size_t n = vv_pixels8_bytes(VV_PIXELS8_YUV420, o.width, o.height);
+        uint8_t *yuv = malloc(n);
+        assert_non_null(yuv);
+        const char *methods[] = {"raycast", "splat"};
+        for (int m = 0; m < 2; m++) {
+            vv_renderer *r = NULL;
+            vt_ok(vv_renderer_new(&r, methods[m]));
+            vv_pixels8 p8 = {.yuv = yuv,
+                             .width = o.width,
+                             .height = o.height,
+                             .format = VV_PIXELS8_YUV420,
+                             .converted_in_tiles = -1};
+            vv_render_options ro;
+            vv_render_options_init(&ro);
+            ro.pixels8 = &p8;
+            memset(yuv, 0x5a, n);
+            vt_ok(vv_renderer_render(r, w, &w->view, &ro, img));
+            assert_int_equal(p8.converted_in_tiles, m == 0);
+            uint8_t *want = yuv_of(img);
+            assert_memory_equal(yuv, want, n);
+            expect_turbojpeg_planes(img, yuv);
+            free(want);
+            /* no buffer for the format asked: refused */
+            vv_pixels8 bad = {
+                .rgbx = yuv, .width = o.width, .height = o.height, .format = VV_PIXELS8_YUV420};
+            ro.pixels8 = &bad;
+            assert_int_equal(vv_renderer_render(r, w, &w->view, &ro, img), VV_ERR_INVALID);
+            assert_non_null(strstr(vv_error_message(), "8-bit pixels"));
+            vv_renderer_free(r);
+        }
+        free(yuv);
+        vv_image_free(img);
+        vv_world_free(w);
+    }
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -900,7 +1154,7 @@ main(void) {
         cmocka_unit_test(test_option_errors), cmocka_unit_test(test_world_checks),
         cmocka_unit_test(test_frame_runner),  cmocka_unit_test(test_camera_rays),
         cmocka_unit_test(test_region_ops),    cmocka_unit_test(test_stand_in),
-        cmocka_unit_test(test_pixels8),
+        cmocka_unit_test(test_pixels8),       cmocka_unit_test(test_pixels8_yuv420),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

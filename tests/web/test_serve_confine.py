@@ -28,57 +28,18 @@ Checks, each on the real binary:
 usage: test_serve_confine.py VOLVIS_BINARY
 Exits 77 (skipped) when python3-websockets is missing.
 """
-import asyncio, ctypes, json, os, socket, subprocess, sys, tempfile, threading, time
+import asyncio, ctypes, functools, json, os, socket, sys, tempfile, threading, time
 
-SKIP = 77
-try:
-    import websockets
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(SKIP)
+import serve_client  # exits 77 without python3-websockets
 
 BIN = sys.argv[1]
 WAIT = 20  # seconds for any one reply, on a loaded 2-core machine
 SECRET = "TOPSECRET-outside-the-root"
+Server = functools.partial(serve_client.Server, BIN)
 
 
 def nrrd(path, dims, value, content="inside"):
-    hdr = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: {dims[0]} {dims[1]} {dims[2]}\n"
-           f"spacings: 1 1 1\ncontent: {content}\nencoding: raw\n\n")
-    with open(path, "wb") as f:
-        f.write(hdr.encode() + bytes([value]) * (dims[0] * dims[1] * dims[2]))
-
-
-class Server:
-    def __init__(self, args):
-        self.log = tempfile.TemporaryFile(mode="w+")
-        self.p = subprocess.Popen([BIN, "serve", "--port", "0"] + args, stdout=subprocess.PIPE,
-                                  stderr=self.log, text=True)
-        line = self.p.stdout.readline().strip()
-        if not line.startswith("http"):
-            raise SystemExit(f"server did not start: {args}\n{self.text()}")
-        self.base, self.token = line.split("/?token=")
-
-    def text(self):
-        self.log.seek(0)
-        return self.log.read()
-
-    def connect(self):
-        host = self.base.split("//", 1)[1]
-        return websockets.connect(f"ws://{host}/ws", subprotocols=["volvis"], origin=self.base,
-                                  extra_headers={"Cookie": "volvis_token=" + self.token},
-                                  max_size=1 << 26)
-
-    def stop(self):
-        self.p.terminate()
-        try:
-            self.p.wait(20)
-        except subprocess.TimeoutExpired:
-            self.p.kill()
-        log = self.text()
-        for bad in ("Sanitizer", "runtime error:"):
-            assert bad not in log, log[-4000:]
-        return log
+    serve_client.nrrd(path, dims, bytes([value]) * (dims[0] * dims[1] * dims[2]), content)
 
 
 async def text_reply(ws, pred, what):

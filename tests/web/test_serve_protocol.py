@@ -19,89 +19,37 @@ Checks, each on the real binary:
     changing its colour changes the frame; a 4-D NIfTI of 3 time steps
     (nibabel) has the time slider's 3 steps, and a step changes the frame;
   - --cert/--key (a self-signed certificate made with openssl): HTTPS answers
-    200 with the token and 403 without, and a frame arrives over WSS.
+    200 with the token and 403 without, and a frame arrives over WSS;
+  - the frames' JPEG (encoded from the render's YUV 4:2:0 planes) at an odd
+    size, 999 x 799, and the drag's reduced frames decode (PIL) to their
+    header's size, and the still frame is within 48 dB of PIL's own JPEG of
+    the view's PNG (RGB, 4:2:0, the same quality), as close to the PNG as it.
 
-usage: test_serve_protocol.py VOLVIS_BINARY DATA_DIR
+usage: test_serve_protocol.py VOLVIS_BINARY DATA_DIR [CHECK]
+  CHECK: run only the checks whose title contains this text
 Exits 77 (skipped) when python3-websockets or PIL is missing.
 """
-import asyncio, json, os, shutil, ssl, struct, subprocess, sys, tempfile, time
+import asyncio, functools, json, os, shutil, ssl, subprocess, sys, tempfile, time
 import urllib.error, urllib.request
 
-SKIP = 77
+import serve_client  # exits 77 without python3-websockets
+
 try:
-    import websockets
     import numpy as np
     from PIL import Image
 except ImportError as e:
     print(f"skipped: {e}")
-    sys.exit(SKIP)
+    sys.exit(serve_client.SKIP)
 
 BIN, DATA = sys.argv[1], sys.argv[2]
+ONLY = sys.argv[3] if len(sys.argv) > 3 else ""
 TIMEOUT = 180  # seconds for any one wait, on a loaded 2-core machine
-
-
-class Server:
-    def __init__(self, args, mpi=0):
-        cmd = [BIN, "serve", "--port", "0"] + args
-        env = None
-        if mpi:
-            cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n",
-                   str(mpi)] + cmd
-            # no X display for mpirun or the ranks: Open MPI's hwloc probes the X
-            # servers :0 to :9 for GPUs otherwise (docs/parallel.md)
-            env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
-            env["HWLOC_COMPONENTS"] = "-gl"
-        self.mpi = mpi
-        self.log = tempfile.TemporaryFile(mode="w+")
-        self.p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=self.log, text=True,
-                                  env=env)
-        line = self.p.stdout.readline().strip()
-        if not line.startswith("http"):
-            self.log.seek(0)
-            raise SystemExit(f"server did not start: {cmd}\n{self.log.read()}")
-        self.base, self.token = line.split("/?token=")
-
-    def connect(self, context=None):
-        host = self.base.split("//", 1)[1]
-        scheme = "wss" if context else "ws"
-        return websockets.connect(f"{scheme}://{host}/ws", subprotocols=["volvis"],
-                                  origin=self.base, ssl=context,
-                                  extra_headers={"Cookie": "volvis_token=" + self.token},
-                                  max_size=1 << 27)
-
-    def stop(self):
-        self.p.terminate()
-        try:
-            self.p.wait(30)
-        except subprocess.TimeoutExpired:
-            self.p.kill()
-        # Ctrl-C and SIGTERM end the server with status 0; mpirun, which signals every
-        # rank itself, reports the signal
-        self.log.seek(0)
-        log = self.log.read()
-        for bad in ("Sanitizer", "runtime error:"):  # ASan, LSan, UBSan, TSan reports
-            assert bad not in log, log[-4000:]
-        assert self.mpi or self.p.returncode in (0, -15), (self.p.returncode, log[-2000:])
-
-
-def parse(m):
-    n = struct.unpack("<I", m[4:8])[0]
-    return m[:4].decode(), json.loads(m[8:8 + n]), m[8 + n:]
+Server = functools.partial(serve_client.Server, BIN)
 
 
 async def until(ws, pred, what):
     """Reads messages until pred(kind, header, payload) is true; returns that message."""
-    deadline = time.time() + TIMEOUT
-    while time.time() < deadline:
-        m = await asyncio.wait_for(ws.recv(), TIMEOUT)
-        if isinstance(m, str):
-            j = json.loads(m)
-            r = ("TEXT", j, None)
-        else:
-            r = parse(m)
-        if pred(*r):
-            return r
-    raise AssertionError(f"no {what} within {TIMEOUT} s")
+    return await serve_client.until(ws, pred, what, TIMEOUT)
 
 
 def sharp(k, h, p):
@@ -130,22 +78,29 @@ def pixels(png_bytes, path):
     return np.asarray(Image.open(path)).astype(int)
 
 
+async def drag(ws, width=320, height=256):
+    """hello with a view of @width x @height, its first sharp frame, a drag of 10
+    rotations, a zoom that stops (input 11); returns every frame after the first,
+    (header, JPEG), to the sharp frame of input 11."""
+    await ws.send(json.dumps({"type": "hello", "width": width, "height": height}))
+    await until(ws, sharp, "first sharp frame")
+    for i in range(1, 11):
+        await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6, "dy": 2,
+                                  "seq": i, "moving": True}))
+        await asyncio.sleep(0.02)
+    await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2, "seq": 11,
+                              "moving": False}))
+    frames = []
+    while True:
+        k, h, p = await until(ws, lambda k, h, p: k == "FRME", "frame")
+        frames.append((h, p))
+        if h["sharp"] and h["input_seq"] == 11:
+            return frames
+
+
 async def drag_and_png(srv, root, name, cli_extra=(), steps_expected=False):
     async with srv.connect() as ws:
-        await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
-        k, h, _ = await until(ws, sharp, "first sharp frame")
-        for i in range(1, 11):
-            await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6, "dy": 2,
-                                      "seq": i, "moving": True}))
-            await asyncio.sleep(0.02)
-        await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2, "seq": 11,
-                                  "moving": False}))
-        frames = []
-        while True:
-            k, h, p = await until(ws, lambda k, h, p: k == "FRME", "frame")
-            frames.append(h)
-            if h["sharp"] and h["input_seq"] == 11:
-                break
+        frames = [h for h, _ in await drag(ws)]
         reduced = [f for f in frames if f["kind"] != "full"]
         seqs = [f["input_seq"] for f in frames]
         assert seqs == sorted(seqs), seqs  # never an older input after a newer one
@@ -173,6 +128,8 @@ def main():
 
     def check(name, fn):
         nonlocal failures
+        if ONLY not in name:
+            return
         t0 = time.time()
         try:
             fn()
@@ -219,16 +176,7 @@ def main():
                                                         "moving": True}))
                         await gone.send(json.dumps({"type": "png"}))
                 async with srv.connect() as ws:
-                    await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
-                    await until(ws, sharp, "first sharp frame")
-                    for i in range(1, 11):
-                        await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6,
-                                                  "dy": 2, "seq": i, "moving": True}))
-                        await asyncio.sleep(0.02)
-                    await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2,
-                                              "seq": 11, "moving": False}))
-                    await until(ws, lambda k, h, p: sharp(k, h, p) and h["input_seq"] == 11,
-                                "sharp frame of the last input")
+                    await drag(ws)
                     return await png_of(ws)
             ranks = pixels(asyncio.run(run()), os.path.join(root, "mpi_page.png"))
             diff = np.abs(ranks - one)
@@ -401,6 +349,40 @@ def main():
         finally:
             srv.stop()
 
+    def yuv_frames():
+        import io
+
+        def decode(jpeg):
+            return np.asarray(Image.open(io.BytesIO(jpeg)).convert("RGB")).astype(float)
+
+        def psnr(a, b):
+            mse = np.mean((a - b) ** 2)
+            return float("inf") if mse == 0 else 10 * np.log10(255.0 ** 2 / mse)
+
+        srv = Server([head])
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    frames = await drag(ws, 999, 799)
+                    return frames, await png_of(ws)
+            frames, png = asyncio.run(run())
+        finally:
+            srv.stop()
+        for h, p in frames:  # every frame, reduced ones of odd sides included
+            img = decode(p)
+            assert img.shape == (h["height"], h["width"], 3), (img.shape, h)
+        h, frame = frames[-1]
+        assert (h["width"], h["height"]) == (999, 799), h
+        view = Image.open(io.BytesIO(png)).convert("RGB")
+        ref = io.BytesIO()  # libjpeg's encoder from RGB, as tjCompress2 of RGBX was
+        view.save(ref, "JPEG", quality=h["quality"], subsampling=2)
+        ours, theirs, exact = decode(frame), decode(ref.getvalue()), np.asarray(view).astype(float)
+        between, to_ours, to_theirs = psnr(ours, theirs), psnr(ours, exact), psnr(theirs, exact)
+        print(f"  999 x 799 at quality {h['quality']}: {between:.1f} dB between the two "
+              f"JPEGs; to the PNG {to_ours:.1f} dB (YUV planes), {to_theirs:.1f} dB (PIL)")
+        assert between >= 48, between
+        assert to_ours >= to_theirs - 0.5, (to_ours, to_theirs)
+
     check("drag and PNG in memory equal volvis render of the saved session", in_memory)
     check("out of core: progressive still frames, PNG equals volvis render", out_of_core)
     check("mpirun -n 2: the PNG within 2 levels of one process", mpi)
@@ -409,6 +391,7 @@ def main():
     check("channels (OME-TIFF) and time steps (4-D NIfTI)", channels_and_time)
     check("--cert/--key: HTTPS, 403 without the token, frames over WSS", tls)
     check("the slice window of ch2better.nii.gz spans its brain", foreground_window)
+    check("JPEG from YUV 4:2:0 planes at 999 x 799: decodes, within 48 dB of RGB's", yuv_frames)
     if failures == 0:
         shutil.rmtree(tmp, ignore_errors=True)
     else:

@@ -16,26 +16,20 @@ by itself once it is.
 
 usage: test_serve_url.py VOLVIS_BINARY
 """
-import asyncio, functools, http.server, json, os, shutil, struct, subprocess, sys, tempfile
-import threading, time
+import asyncio, functools, http.server, json, os, shutil, subprocess, sys, tempfile
+import threading
 
-SKIP = 77
-try:
-    import websockets
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(SKIP)
+import serve_client  # exits 77 without python3-websockets
 
 BIN = sys.argv[1]
 WAIT = 40
+SKIP = serve_client.SKIP
 
 
 def nrrd(path, n):
-    data = bytes(((i + 2 * j + 3 * k) % 251) for k in range(n) for j in range(n) for i in range(n))
-    hdr = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: {n} {n} {n}\nspacings: 1 1 1\n"
-           f"encoding: raw\n\n")
-    with open(path, "wb") as f:
-        f.write(hdr.encode() + data)
+    serve_client.nrrd(path, (n, n, n),
+                      bytes(((i + 2 * j + 3 * k) % 251) for k in range(n) for j in range(n)
+                            for i in range(n)))
 
 
 class Quiet(http.server.SimpleHTTPRequestHandler):
@@ -72,27 +66,16 @@ def main():
     local = subprocess.run([BIN, "info", store], capture_output=True, text=True, check=True)
     print("volvis info by URL and by path:\n" + info.stdout + "\n" + local.stdout)
 
-    p = subprocess.Popen([BIN, "serve", "--port", "0", "--root", root, "--allow-url", prefix,
-                          url], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    line = p.stdout.readline().strip()
-    assert line.startswith("http"), p.stderr.read()
-    base, token = line.split("/?token=")
-    host = base.split("//", 1)[1]
+    srv = serve_client.Server(BIN, ["--root", root, "--allow-url", prefix, url])
 
     async def recv_until(ws, pred, what):
-        deadline = time.time() + WAIT
-        while time.time() < deadline:
-            m = await asyncio.wait_for(ws.recv(), WAIT)
-            if isinstance(m, str):
-                j = json.loads(m)
-                assert j["type"] != "error", j
-                if pred("TEXT", j, None):
-                    return j
-            else:
-                n = struct.unpack("<I", m[4:8])[0]
-                if pred(m[:4].decode(), json.loads(m[8:8 + n]), m[8 + n:]):
-                    return m[8 + n:]
-        raise AssertionError(f"no {what} within {WAIT} s")
+        """The payload (a text message's JSON) of the first message pred() holds for;
+        an error reply fails."""
+        def ok(k, h, p):
+            assert not (k == "TEXT" and h["type"] == "error"), h
+            return pred(k, h, p)
+        k, h, p = await serve_client.until(ws, ok, what, WAIT)
+        return h if k == "TEXT" else p
 
     async def png(ws):
         await recv_until(ws, lambda k, h, p: k == "FRME" and h["sharp"], "sharp frame")
@@ -100,9 +83,7 @@ def main():
         return await recv_until(ws, lambda k, h, p: k == "PNG_", "PNG")
 
     async def run():
-        conn = functools.partial(websockets.connect, f"ws://{host}/ws", subprotocols=["volvis"],
-                                 origin=base, extra_headers={"Cookie": "volvis_token=" + token},
-                                 max_size=1 << 26)
+        conn = srv.connect
         async with conn() as ws:
             await ws.send(json.dumps({"type": "hello", "width": 96, "height": 80}))
             st = await recv_until(ws, lambda k, h, p: k == "TEXT" and h["type"] == "state" and
@@ -131,8 +112,7 @@ def main():
     try:
         asyncio.run(run())
     finally:
-        p.terminate()
-        p.wait(20)
+        srv.stop()
         httpd.shutdown()
     bad = [q for q in Quiet.paths if not q.startswith("/data/")]
     assert not bad, bad

@@ -300,4 +300,10 @@ void srv_wake(srv_server *srv);
 int srv_jpeg(void *handle, const uint8_t *rgb, int width, int height, int quality, int grey,
              unsigned char **out, unsigned long *size);
 
+/** JPEG of @p yuv (vv_pixels8's VV_PIXELS8_YUV420 planes of a @p width x @p height frame)
+ * at @p quality, 4:2:0, into a new buffer (tjFree): the JPEG srv_jpeg makes of the frame's
+ * RGBX, without libjpeg-turbo's colour pass. 0 or -1. @p handle: a tjhandle for compression. */
+int srv_jpeg_yuv420(void *handle, const uint8_t *yuv, int width, int height, int quality,
+                    unsigned char **out, unsigned long *size);
+
 #endif

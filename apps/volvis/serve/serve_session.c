@@ -91,7 +91,7 @@ struct srv_session {
     char preview_renderer[32];
     vv_preview_policy policy;
     tjhandle tj;
-    uint8_t *pix; /* 8-bit pixels of the frame being encoded */
+    uint8_t *pix; /* YUV 4:2:0 planes of the frame being encoded (vv_pixels8) */
     size_t pix_cap;
     const vv_image *pix_of; /* the image the render left in pix (vv_pixels8), or NULL */
     vv_time_steps *ts;
@@ -170,6 +170,20 @@ srv_jpeg(void *handle, const uint8_t *pixels, int width, int height, int quality
     *size = 0;
     return tjCompress2((tjhandle)handle, pixels, width, 0, height, grey ? TJPF_GRAY : TJPF_RGBX,
                        out, size, grey ? TJSAMP_GRAY : TJSAMP_420, quality, TJFLAG_FASTDCT) == 0
+               ? 0
+               : -1;
+}
+
+int
+srv_jpeg_yuv420(void *handle, const uint8_t *yuv, int width, int height, int quality,
+                unsigned char **out, unsigned long *size) {
+    *out = NULL;
+    *size = 0;
+    const size_t pw = (size_t)width + (size_t)(width & 1),
+                 ph = (size_t)height + (size_t)(height & 1);
+    const unsigned char *planes[3] = {yuv, yuv + pw * ph, yuv + pw * ph + (pw / 2) * (ph / 2)};
+    return tjCompressFromYUVPlanes((tjhandle)handle, planes, width, NULL, height, TJSAMP_420, out,
+                                   size, quality, TJFLAG_FASTDCT) == 0
                ? 0
                : -1;
 }
@@ -519,11 +533,12 @@ ensure_preview(srv_session *s, const vv_world *w) {
     return VV_OK;
 }
 
-/* Room in the render thread's 8-bit buffer for @p w x @p h pixels (grown
- * as needed: no page faults a frame). 0, or -1 out of memory. */
+/* Room in the render thread's 8-bit buffer for a frame of @p w x @p h
+ * pixels in YUV 4:2:0 (grown as needed: no page faults a frame). 0, or -1
+ * out of memory. */
 static int
 pix_room(srv_session *s, int w, int h) {
-    size_t need = 4 * (size_t)w * (size_t)h;
+    size_t need = vv_pixels8_bytes(VV_PIXELS8_YUV420, w, h);
     if (need > s->pix_cap) {
         uint8_t *p = realloc(s->pix, need);
         if (!p)
@@ -534,8 +549,8 @@ pix_room(srv_session *s, int w, int h) {
     return 0;
 }
 
-/* 8-bit RGBX of @p img for JPEG: what its render left in the buffer
- * (vv_pixels8: converted by the tiles that drew it), or converted now (an
+/* @p img as JPEG's YUV 4:2:0 planes (vv_pixels8): what its render left in
+ * the buffer (converted by the tiles that drew it), or converted now (an
  * MPI frame; the PNG, which must equal the CLI's, goes through
  * vv_image_write_png). */
 static uint8_t *
@@ -546,11 +561,12 @@ pixels(srv_session *s, const vv_image *img) {
     }
     if (pix_room(s, img->width, img->height) != 0)
         return NULL;
-        /* rows on every core: the frame was just written by all of them, each
-         * holds part of it in its cache */
+        /* pairs of rows on every core: the frame was just written by all of
+         * them, each holds part of it in its cache */
 #pragma omp parallel for schedule(static)
-    for (int y = 0; y < img->height; y++)
-        vv_image_rect_to_rgbx8(img, 0, y, img->width, y + 1, s->pix);
+    for (int y = 0; y < img->height; y += 2)
+        vv_image_rect_to_yuv420(img, 0, y, img->width, y + 2 < img->height ? y + 2 : img->height,
+                                s->pix);
     return s->pix;
 }
 
@@ -594,10 +610,11 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     cancel_ctx cc = {s, gen, cancellable};
     vv_render_options ro;
     vv_render_options_init(&ro);
-    /* the frame in 8 bits, written by the tiles that drew it (no pass of its own) */
-    vv_pixels8 p8 = {.width = iw, .height = ih};
+    /* the frame in 8 bits, JPEG's YUV 4:2:0, written by the tiles that drew
+     * it (no pass of its own, and no colour pass in the encoder) */
+    vv_pixels8 p8 = {.width = iw, .height = ih, .format = VV_PIXELS8_YUV420};
     if (pix_room(s, iw, ih) == 0) {
-        p8.rgbx = s->pix;
+        p8.yuv = s->pix;
         ro.pixels8 = &p8;
     }
     ro.threads = s->srv->threads;
@@ -631,12 +648,12 @@ publish(srv_session *s, const vv_image *img, vv_preview_kind kind, int sharp, lo
         double render_s) {
     int quality = kind == VV_PREVIEW_FULL ? SRV_JPEG_STILL : SRV_JPEG_MOVING;
     double t0 = now_s();
-    const uint8_t *rgbx = pixels(s, img);
-    if (!rgbx)
+    const uint8_t *yuv = pixels(s, img);
+    if (!yuv)
         return;
     unsigned char *jpeg = NULL;
     unsigned long size = 0;
-    int rc = srv_jpeg(s->tj, rgbx, img->width, img->height, quality, 0, &jpeg, &size);
+    int rc = srv_jpeg_yuv420(s->tj, yuv, img->width, img->height, quality, &jpeg, &size);
     double encode_s = now_s() - t0;
     if (rc) {
         tjFree(jpeg);
@@ -716,11 +733,11 @@ thumbnail(srv_session *s, const vv_world *base, const char *name, int size, uint
     w->view.height = size;
     vv_image *img = NULL;
     if (draw(s, w, VV_PREVIEW_FULL, 0, 0, 0, NULL, &img) == VV_OK) {
-        const uint8_t *rgbx = pixels(s, img);
+        const uint8_t *yuv = pixels(s, img);
         unsigned char *jpeg = NULL;
         unsigned long jn = 0;
-        if (rgbx) {
-            if (srv_jpeg(s->tj, rgbx, img->width, img->height, 85, 0, &jpeg, &jn) == 0) {
+        if (yuv) {
+            if (srv_jpeg_yuv420(s->tj, yuv, img->width, img->height, 85, &jpeg, &jn) == 0) {
                 char header[256];
                 snprintf(header, sizeof header, "{\"name\":\"%s\",\"width\":%d,\"height\":%d}",
                          name, img->width, img->height);

@@ -532,7 +532,8 @@ typedef struct vv_frame_job {
     /** NULL, or the image whose pixels a tile leaves final when it returns
      *  (the frame's last pass over the caller's image, whole renders
      *  only): with vv_render_options.pixels8 the runner converts each
-     *  finished tile to 8 bits on its thread (vv_image_rect_to_rgbx8) and,
+     *  finished tile to 8 bits on its thread (vv_image_rect_to_rgbx8, or
+     *  vv_image_rect_to_yuv420 when tiles have even sides) and,
      *  once every tile of the whole image is done, sets
      *  pixels8->converted_in_tiles. */
     const vv_image *image;
