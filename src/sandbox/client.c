@@ -433,8 +433,14 @@ sbx_hello_wait(int sock, double deadline, const char *exe, const char *name, con
         if (got == -1)
             continue;
         if (got == (ssize_t)sizeof h && h.magic == SBX_MAGIC && h.kind == SBX_HELLO) {
-            if (h.version == VV_SANDBOX_PROTOCOL)
+            if (h.version == VV_SANDBOX_PROTOCOL && h.layout == sbx_layout())
                 return VV_OK;
+            if (h.version == VV_SANDBOX_PROTOCOL)
+                return vv_error_set(VV_ERR_IO,
+                                    "%s: %s: the reader %s speaks protocol %u with structures of "
+                                    "another layout (another build's volvis-reader: set "
+                                    "VOLVIS_READER to this build's)",
+                                    name, file, exe, h.version);
             return vv_error_set(VV_ERR_IO,
                                 "%s: %s: the reader %s speaks protocol %u, this library %d "
                                 "(another build's volvis-reader: set VOLVIS_READER to this "

@@ -4,7 +4,8 @@
  *
  * The protocol, over a SOCK_SEQPACKET socket pair on the reader's
  * descriptor 3 (each message whole or not at all): the reader first says
- * hello (sbx_hello: its protocol version, a layout no version changes);
+ * hello (sbx_hello: its protocol version and sbx_layout(), a fingerprint
+ * of its structures; the hello's own layout no version changes);
  * the parent sends one sbx_request; the reader answers with an sbx_reply
  * of kind SBX_FORMAT once it knows the row it reads with (so that a crash
  * can be named after its reader) and one of kind SBX_RESULT, which carries
@@ -64,7 +65,7 @@ typedef struct sbx_hello {
     uint32_t magic;
     int32_t kind; /* SBX_HELLO */
     uint32_t version;
-    uint32_t pad;
+    uint32_t layout; /* sbx_layout(): 0 from readers before it */
 } sbx_hello;
 
 /** The parent's request. */
@@ -226,6 +227,16 @@ int sbx_take_message(int op, const void *msg, size_t len, int fd, char name[VV_S
 /** The bytes of a store's window (payload.c): its table, or its largest
  *  chunk; 0 when a chunk is over SBX_MAX_BOX_BYTES. */
 uint64_t sbx_window_bytes(const sbx_store_head *h);
+
+/**
+ * A fingerprint of the wire's layout (the sizes of the request, the
+ * replies, a store's head and box, and vv_load_info, which travels in a
+ * reply's info bytes), sent in the hello: a reader of the same protocol
+ * version but another build whose structures differ (a stale
+ * /usr/local/libexec/volvis-reader found before this build's) is refused
+ * by name before any request, not misread.
+ */
+uint32_t sbx_layout(void);
 
 /* ---- client.c (the parent) ---- */
 

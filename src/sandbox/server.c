@@ -365,7 +365,7 @@ vv_sandbox_serve(int argc, char **argv, const vv_sandbox_handler *h) {
         return 2;
     }
     /* who we are first, in a layout no protocol changes */
-    const sbx_hello hello = {SBX_MAGIC, SBX_HELLO, VV_SANDBOX_PROTOCOL, 0};
+    const sbx_hello hello = {SBX_MAGIC, SBX_HELLO, VV_SANDBOX_PROTOCOL, sbx_layout()};
     send_reply(&hello, sizeof hello, -1);
     static sbx_request rq;
     ssize_t n;

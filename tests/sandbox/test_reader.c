@@ -306,13 +306,19 @@ test_reader_alone_and_missing(void **state) {
 
 /* This program as a reader of another build (VT_FAKE_READER set, started
  * by the loader with its socket on descriptor 3): a hello of protocol
- * VT_FAKE_READER, or ("junk") bytes that are no hello; then it waits for
- * the loader to close. */
+ * VT_FAKE_READER, ("layout") of this protocol with another layout, or
+ * ("junk") bytes that are no hello; then it waits for the loader to close. */
 static int
 fake_reader(const char *what) {
     char buf[64];
     if (!strcmp(what, "junk")) {
         if (send(SBX_FD, "junk", 4, MSG_NOSIGNAL) != 4)
+            return 1;
+    } else if (!strcmp(what, "layout")) {
+        /* this protocol, structures of another build (the fingerprint of
+         * a reader from before it: 0) */
+        const sbx_hello h = {SBX_MAGIC, SBX_HELLO, VV_SANDBOX_PROTOCOL, 0};
+        if (send(SBX_FD, &h, sizeof h, MSG_NOSIGNAL) != (ssize_t)sizeof h)
             return 1;
     } else {
         const sbx_hello h = {SBX_MAGIC, SBX_HELLO, (uint32_t)atoi(what), 0};
@@ -341,8 +347,9 @@ test_reader_of_another_build(void **state) {
     setenv("VOLVIS_SANDBOX_SPARE", "0", 1); /* each load its own reader */
     vv_sandbox_release_spare();
     static const char *const cases[][2] = {{"99", "speaks protocol 99, this library"},
-                                           {"junk", "does not speak protocol"}};
-    for (int i = 0; i < 2; i++) {
+                                           {"junk", "does not speak protocol"},
+                                           {"layout", "with structures of another layout"}};
+    for (int i = 0; i < 3; i++) {
         setenv("VT_FAKE_READER", cases[i][0], 1);
         vv_volume *v = NULL;
         vv_status s = load(&v, vt_data("volumes/ct_head.nrrd"), 1);
