@@ -14,8 +14,14 @@ What it maps (napari -> VolVis, each layer one volume object of a World):
 - rendering: translucent -> composite (emission-absorption, unshaded),
   mip -> mip, minip -> minip, average -> xray (the mean), iso -> iso at
   ``iso_threshold`` (shaded, in the colormap's colour at the threshold),
-  attenuated_mip -> mip (VolVis has no attenuated MIP: said in the status
-  line), additive -> composite.
+  attenuated_mip -> attenuated-mip (napari's method: the maximum of the
+  sample values scaled by exp(-attenuation (S - 1) / step), S the running
+  sum of the contrast-normalised values) with the layer's ``attenuation``
+  at VisPy's relative step 0.8 (the step napari's exponent divides by); a
+  layer drawn out of core (opened by the VolVis reader) is rendered by
+  regions, which cannot carry the sum along the ray, so there it is drawn
+  as mip, and so it is with shadows (the ray tracer draws no attenuated
+  MIP; both said in the status line); additive -> composite.
 - colormap, contrast limits, gamma, opacity: a transfer function of up to
   130 points over the contrast limits (even in t and in t^gamma), colour ``colormap((t)^gamma)`` at data
   value ``lo + t (hi - lo)``; opacity there ``opacity * t^gamma`` per voxel
@@ -63,7 +69,11 @@ from ._reader import level_array
 __all__ = ["VolVisWidget", "napari_view", "layer_object"]
 
 _MODES = {"translucent": "composite", "additive": "composite", "mip": "mip",
-          "minip": "minip", "average": "xray", "iso": "iso", "attenuated_mip": "mip"}
+          "minip": "minip", "average": "xray", "iso": "iso",
+          "attenuated_mip": "attenuated-mip"}
+#: VisPy's volume visual's relative step size (its default, which napari
+#: keeps): napari's attenuated MIP divides its exponent by it
+NAPARI_RELATIVE_STEP = 0.8
 
 
 def napari_view(camera, canvas_hw, size, bounds=None):
@@ -174,6 +184,13 @@ def layer_object(layer, cache=None):
         obj = volvis.VolumeObject(v, name=layer.name[:60])
         spacing = scale
     mode, tf, iso_rgb, rendering = layer_tf(layer, float(np.min(spacing)))
+    note = ""
+    if mode == "attenuated-mip" and pyr is not None:
+        mode = "mip"
+        note = "attenuated_mip of an out-of-core layer drawn as mip"
+    elif mode == "attenuated-mip":
+        obj.attenuation = float(getattr(layer, "attenuation", 0.05))
+        obj.step = NAPARI_RELATIVE_STEP
     obj.mode = mode
     obj.tf = tf
     if mode == "iso":
@@ -182,7 +199,6 @@ def layer_object(layer, cache=None):
         obj.shading = True
     else:
         obj.shading = False
-    note = "attenuated_mip drawn as mip" if rendering == "attenuated_mip" else ""
     return obj, pyr, note
 
 
@@ -357,6 +373,9 @@ class VolVisWidget(QWidget):
                 obj.casts_shadows = True
                 obj.receives_shadows = True
                 obj.shading = True
+                if obj.mode == "attenuated-mip":  # raytrace draws no attenuated MIP
+                    obj.mode = "mip"
+                    notes.append("%s: attenuated_mip drawn as mip with shadows" % obj.name)
         else:
             world.add_light(headlight=True)
         return world, view, ("raytrace" if shadows else "raycast"), mirror, pyramids, notes
