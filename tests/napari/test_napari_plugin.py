@@ -230,6 +230,43 @@ def test_widget_attenuated_mip(make_napari_viewer, qtbot, plugin, out_dir):
     print("PSNR attenuated_mip: %.2f dB" % p)
 
 
+@pytest.mark.parametrize("rendering", ["mip", "translucent"])
+def test_widget_additive_blending(make_napari_viewer, qtbot, plugin, out_dir, rendering):
+    """Two additive layers in memory on one grid are summed, as napari adds
+    them: one object of two channels (VolVis's maximum rule for mip, its
+    additive rule for translucent), whose frame is the sum of the frames of
+    each layer alone."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    a = np.array(volvis.open(str(DATA / "neghip.slc")).array)
+    v = make_napari_viewer()
+    layers = [v.add_image(d, colormap=c, contrast_limits=(0, 255), rendering=rendering,
+                          blending="additive", opacity=0.8)
+              for d, c in ((a, "green"), (np.ascontiguousarray(a[:, :, ::-1]), "magenta"))]
+    v.dims.ndisplay = 3
+    v.reset_view()
+    viewer_camera(v).angles = (0, 20, 75)
+    w = VolVisWidget(v, max_side=128, debounce_ms=10)
+    both = _final(qtbot, w, 0)
+    volvis.save_png(both, str(out_dir / ("widget_additive_%s.png" % rendering)))
+    both = both.astype(int)
+    (o,) = w.frame["world"].objects
+    assert o._c.n_channels == 2 and not w.frame["notes"], w.frame["notes"]
+    alone = []
+    for k in (0, 1):
+        n = w.finals
+        layers[k].visible = True
+        layers[1 - k].visible = False
+        qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+        alone.append(w.image.astype(int))
+        assert not w.frame["notes"]  # one layer over black: nothing to add to
+
+    want = np.minimum(alone[0] + alone[1], 255)[..., :3]
+    err = np.abs(both[..., :3] - want)
+    assert err.max() <= 2, "additive %s: the sum differs by up to %d" % (rendering, err.max())
+    assert (alone[0][..., 1] > 40).any() and (alone[1][..., 0] > 40).any()
+    print("additive %s: sum within %d levels" % (rendering, err.max()))
+
+
 def test_camera_mapping_against_napari_canvas(make_napari_viewer, qtbot, plugin, out_dir):
     """The widget's view of napari's camera against napari's own 3-D canvas
     (VisPy, OpenGL under Xvfb): MIP of neghip, several camera angles and a
