@@ -260,6 +260,8 @@ vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv
     double sum = 0;
     float best = -INFINITY;
     double tbest = k * dt;
+    /* (a real maximum below 0 grows as its scale shrinks: no bound) */
+    const int stop = (double)a->vmax + (double)a->qoff >= 0;
     for (; k <= kend; k++) {
         float p[3];
         vv_vray_point(r, k * dt, p);
@@ -274,6 +276,9 @@ vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv
             best = x;
             tbest = k * dt;
         }
+        /* every later sample is at most vmax, scaled by at most f */
+        if (stop && a->vmax * f + a->qoff * (f - 1) <= best)
+            break;
     }
     *value = best;
     *depth = (float)tbest;

@@ -160,10 +160,11 @@ void vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *cons
 /* What napari's attenuated maximum intensity projection
  * (VV_MODE_ATTENUATED_MIP) takes from the object: the transfer function's
  * contrast limits [lo, lo + 1 / inv_range] in stored units (real value -
- * qoff), the cache's offset qoff, and k = attenuation / relative step (the
- * step in units of the smallest voxel spacing). */
+ * qoff), the cache's offset qoff, its largest stored value vmax, and
+ * k = attenuation / relative step (the step in units of the smallest voxel
+ * spacing). */
 typedef struct vv_vatten {
-    float lo, inv_range, qoff;
+    float lo, inv_range, qoff, vmax;
     double k;
 } vv_vatten;
 
@@ -174,8 +175,10 @@ typedef struct vv_vatten {
  * scaled by exp(-k (S - 1)), S including the sample itself, and the largest
  * scaled value (back in stored units) is *value, the parameter of its first
  * sample *depth. With k == 0 every scale is exactly 1 and the result is the
- * plain maximum. Every sample is taken: the sum depends on all of them.
- * Thread-safe. */
+ * plain maximum. The sum needs every sample up to the last that can win:
+ * the scale only shrinks along the ray, so once vmax at the current scale
+ * (real vmax + qoff >= 0) cannot beat the maximum the march stops (the same
+ * result). Thread-safe. */
 void vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv_vatten *a,
                             float *value, float *depth);
 

@@ -982,6 +982,11 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
         ro->att.lo = (float)(lo - ro->c->qoff);
         ro->att.inv_range = (float)(1.0 / (hi - lo));
         ro->att.qoff = (float)ro->c->qoff;
+        const vv_vcache *c = ro->c;
+        float vmax = -INFINITY;
+        for (size_t g = 0; g < (size_t)c->gx * (size_t)c->gy * (size_t)c->gz; g++)
+            vmax = c->gmax[g] > vmax ? c->gmax[g] : vmax;
+        ro->att.vmax = vmax;
     }
     return VV_OK;
 }
