@@ -11,7 +11,7 @@ struct _VvgTfPanel {
     GtkBox parent;
     VvgDocument *doc;
     gboolean updating; /* set while widgets are filled from the World */
-    GtkWidget *seg_mode, *threshold, *render_mode, *isovalue, *step;
+    GtkWidget *seg_mode, *threshold, *render_mode, *isovalue, *attenuation, *step;
     VvgTfEditor *tf_editor;
     VvgTf2dEditor *tf2d_editor;
     GtkWidget *w2d_color, *w2d_opacity;
@@ -55,6 +55,7 @@ fill(VvgTfPanel *self) {
         vvg_set_spin(self->threshold, o->threshold);
         gtk_drop_down_set_selected(GTK_DROP_DOWN(self->render_mode), o->mode);
         vvg_set_spin(self->isovalue, o->isovalue);
+        vvg_set_spin(self->attenuation, o->attenuation);
         vvg_set_spin(self->step, o->step);
     }
     fill_window(self, o);
@@ -80,6 +81,7 @@ apply(VvgTfPanel *self) {
     o->threshold = vvg_spin_value(self->threshold);
     o->mode = (vv_render_mode)gtk_drop_down_get_selected(GTK_DROP_DOWN(self->render_mode));
     o->isovalue = vvg_spin_value(self->isovalue);
+    o->attenuation = vvg_spin_value(self->attenuation);
     o->step = vvg_spin_value(self->step);
     vvg_document_changed(self->doc);
 }
@@ -270,9 +272,13 @@ vvg_tf_panel_new(VvgDocument *doc, VvgMarks *marks) {
                                        "labels", NULL};
     self->seg_mode = vvg_row(g, "by", wire_drop(self, segs));
     self->threshold = vvg_row(g, "threshold", wire_spin(self, vvg_spin0(-1e9, 1e9, 1, 2)));
-    static const char *const modes[] = {"composite", "MIP", "MinIP", "X-ray", "isosurface", NULL};
+    /* in vv_render_mode's order */
+    static const char *const modes[] = {"composite",      "MIP", "MinIP", "X-ray", "isosurface",
+                                        "attenuated MIP", NULL};
     self->render_mode = vvg_row(g, "mode", wire_drop(self, modes));
     self->isovalue = vvg_row(g, "isovalue", wire_spin(self, vvg_spin0(-1e9, 1e9, 1, 2)));
+    /* napari's slider spans 0..0.5 */
+    self->attenuation = vvg_row(g, "attenuation", wire_spin(self, vvg_spin0(0, 5, 0.01, 3)));
     self->step = vvg_row(g, "sample step", wire_spin(self, vvg_spin0(0.05, 8, 0.05, 2)));
     /* what a right drag in a slice view sets, typed */
     g = vvg_section(GTK_WIDGET(self), "Slice views: window and level");

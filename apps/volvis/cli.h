@@ -170,9 +170,10 @@ int cli_fail(vv_status s, const char *path);
 
 /** The option specs of `volvis render`, for an initializer list. */
 #define CLI_RENDER_OPT_SPECS                                                                       \
-    {"output", 'o', "OUT"}, {"mode", 0, "composite|mip|minip|xray|iso"}, {"iso", 0, "V"},          \
-        {"tf", 0, "LO:HI"}, {"size", 0, "WxH"}, {"azimuth", 0, "DEG"}, {"elevation", 0, "DEG"},    \
-        {"zoom", 0, "F"}, {"threads", 0, "N"}, {"renderer", 0, "NAME"}, {"step", 0, "S"},          \
+    {"output", 'o', "OUT"}, {"mode", 0, "composite|mip|minip|xray|iso|attenuated-mip"},            \
+        {"iso", 0, "V"}, {"attenuation", 0, "A"}, {"tf", 0, "LO:HI"}, {"size", 0, "WxH"},          \
+        {"azimuth", 0, "DEG"}, {"elevation", 0, "DEG"}, {"zoom", 0, "F"}, {"threads", 0, "N"},     \
+        {"renderer", 0, "NAME"}, {"step", 0, "S"},                                                 \
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
         {"labels", 0, NULL}, {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"},           \
@@ -201,6 +202,8 @@ typedef struct cli_render_args {
     int threads;
     int has_step;
     double step;
+    int has_attenuation;
+    double attenuation;
     int has_raw;
     vv_raw_params raw;
     int series;  /**< --series N (DICOM), 0: the only series */

@@ -14,9 +14,11 @@
 
 #include "cli.h"
 
-static const char *const mode_names[] = {"composite", "mip", "minip", "xray", "iso"};
-static const vv_render_mode mode_values[] = {VV_MODE_COMPOSITE, VV_MODE_MIP, VV_MODE_MINIP,
-                                             VV_MODE_XRAY, VV_MODE_ISO};
+static const char *const mode_names[] = {"composite", "mip", "minip",
+                                         "xray",      "iso", "attenuated-mip"};
+static const vv_render_mode mode_values[] = {VV_MODE_COMPOSITE, VV_MODE_MIP,
+                                             VV_MODE_MINIP,     VV_MODE_XRAY,
+                                             VV_MODE_ISO,       VV_MODE_ATTENUATED_MIP};
 
 /* Prints @p prefix and @p text word-wrapped to @p width columns, every line
  * indented by @p indent spaces. */
@@ -44,7 +46,8 @@ parse_mode(const cli_args *a, const char *text, vv_render_mode *out) {
             *out = mode_values[i];
             return 0;
         }
-    return cli_usage_error(a, "--mode: unknown mode '%s' (composite, mip, minip, xray, iso)", text);
+    return cli_usage_error(
+        a, "--mode: unknown mode '%s' (composite, mip, minip, xray, iso, attenuated-mip)", text);
 }
 
 static int
@@ -311,6 +314,11 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
             return cli_usage_error(a, "--step: must be > 0, got '%s'", s);
         r->has_step = 1;
     }
+    if ((s = cli_get(a, "attenuation"))) {
+        if ((rc = cli_parse_double(a, "attenuation", s, 0, 1e4, &r->attenuation)))
+            return rc;
+        r->has_attenuation = 1;
+    }
     if ((s = cli_get(a, "raw"))) {
         if ((rc = cli_parse_raw(a, "raw", s, &r->raw)))
             return rc;
@@ -402,6 +410,8 @@ world_options(const cli_render_args *r, vv_world_open_options *o, cli_progress *
     }
     o->field = r->field;
     o->step = r->has_step ? r->step : 0;
+    o->has_attenuation = r->has_attenuation;
+    o->attenuation = r->attenuation;
     o->labels = r->labels;
     o->progress = &pr->p; /* a scene's geometry objects are voxelized while loading */
 }
@@ -552,9 +562,13 @@ cli_render_print_options(FILE *out) {
     fprintf(out,
             "  --mode MODE      composite (default), mip (maximum intensity projection),\n"
             "                   minip (minimum intensity projection), xray (average\n"
-            "                   along the ray) or iso (shaded isosurface); for a scene,\n"
+            "                   along the ray), iso (shaded isosurface) or attenuated-mip\n"
+            "                   (napari's attenuated MIP: far values fade behind bright\n"
+            "                   ones; raycast only); for a scene,\n"
             "                   applies to every volume object (geometric objects have none)\n"
             "  --iso V          isovalue for --mode iso (alone it implies --mode iso)\n"
+            "  --attenuation A  attenuation of --mode attenuated-mip, >= 0 (default 0.05,\n"
+            "                   napari's; 0 gives mip)\n"
             "  --tf LO:HI       transfer function ramp from LO (transparent) to HI (opaque)\n"
             "                   in data values (default: from the histogram); for a scene,\n"
             "                   the scene's transfer functions are stretched onto [LO, HI]\n"

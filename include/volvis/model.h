@@ -446,8 +446,21 @@ typedef enum vv_render_mode {
     VV_MODE_MIP = 1,       /**< maximum intensity projection */
     VV_MODE_MINIP = 2,     /**< minimum intensity projection */
     VV_MODE_XRAY = 3,      /**< average value along the ray */
-    VV_MODE_ISO = 4        /**< first isosurface hit, shaded */
+    VV_MODE_ISO = 4,       /**< first isosurface hit, shaded */
+    /** napari's attenuated maximum intensity projection (VisPy's volume
+     * shader): the maximum along the ray of each sample value v_i scaled by
+     * exp(-attenuation (S_i - 1) / step), S_i the sum of the samples'
+     * contrast-normalised values clamp((v - lo) / (hi - lo), 0, 1) up to and
+     * including sample i, [lo, hi] the contrast limits: the values of the
+     * transfer function's first and last opacity points (the volume's range
+     * when they do not span one), step vv_object.step; the scaled maximum is
+     * coloured through the transfer function like MIP. Far structures behind
+     * bright ones fade. */
+    VV_MODE_ATTENUATED_MIP = 5
 } vv_render_mode;
+
+/** The number of render modes (vv_render_mode values 0..VV_MODE_COUNT - 1). */
+#define VV_MODE_COUNT 6
 
 typedef enum vv_segmentation {
     VV_SEG_TRANSFER_FUNCTION = 0, /**< opacity and colour from tf */
@@ -577,9 +590,11 @@ typedef struct vv_object {
     vv_texture_map texture; /**< image texture: geometry and isosurfaces (iso mode) */
     vv_solid_texture solid_texture; /**< solid texture: composited volume samples */
     vv_render_mode mode;
-    double isovalue; /**< VV_MODE_ISO */
-    double step;     /**< sample step in units of the smallest voxel spacing, > 0 */
-    int shading;     /**< 1: Phong shading from gradients; 0: emission only */
+    double isovalue;    /**< VV_MODE_ISO */
+    double attenuation; /**< VV_MODE_ATTENUATED_MIP: napari's attenuation, >= 0 (default 0.05;
+                             napari's slider spans 0..0.5); 0 gives MIP */
+    double step;        /**< sample step in units of the smallest voxel spacing, > 0 */
+    int shading;        /**< 1: Phong shading from gradients; 0: emission only */
     int visible;
     int casts_shadows;          /**< 1: blocks light on its way to other points */
     int receives_shadows;       /**< 1: its points are shaded with shadow rays */
@@ -611,7 +626,7 @@ typedef struct vv_object {
 
 /**
  * A new volume object holding a reference to @p volume (borrowed; the object
- * takes its own reference): identity transform, composite mode, step 0.5,
+ * takes its own reference): identity transform, composite mode, step 0.5, attenuation 0.05,
  * shading on, visible, material ka 0.1 kd 0.6 ks 0.3 shininess 30 colour
  * white, TF a white ramp from opacity 0 at range[0] to 1 at range[1] with
  * opacity_unit_distance the smallest voxel spacing; threshold and isovalue
@@ -905,7 +920,8 @@ vv_status vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field
 
 /**
  * The default transfer function of @p v for @p mode (docs/scene-format.md,
- * "Default scene"): for the projection modes (MIP, MinIP, X-ray) a grey
+ * "Default scene"): for the projection modes (MIP, MinIP, X-ray,
+ * attenuated MIP) a grey
  * ramp from the 1st to the 99.9th percentile of the values; for the others
  * an opacity ramp with a warm colour map over the foreground (the
  * histogram's background peak left out: 2 % to 99.5 % of the remaining

@@ -285,6 +285,8 @@ const char *vv_option_type_name(vv_option_type t);
 
 /** vv_renderer_info.modes: the modes of volume and grid objects it draws (1u << vv_render_mode). */
 #define VV_MODE_BIT(mode) (1u << (unsigned)(mode))
+/** The five classic modes (composite, MIP, MinIP, X-ray, iso); VV_MODE_ATTENUATED_MIP is
+ * drawn only by renderers that add its bit (raycast). */
 #define VV_MODES_ALL                                                                               \
     (VV_MODE_BIT(VV_MODE_COMPOSITE) | VV_MODE_BIT(VV_MODE_MIP) | VV_MODE_BIT(VV_MODE_MINIP) |      \
      VV_MODE_BIT(VV_MODE_XRAY) | VV_MODE_BIT(VV_MODE_ISO))

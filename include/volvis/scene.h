@@ -176,10 +176,12 @@ typedef struct vv_world_open_options {
     vv_default_scene_options view; /**< mode (has_mode), transfer function range (stretched
                                         onto a scene's), isovalue, size (has_size) */
     int has_size;
-    const char *field; /**< a grid's field (NULL: its first scalar field) */
-    double step;       /**< > 0: every object's sample step (units of the smallest spacing) */
-    int labels;        /**< 1: every volume object a label volume (VV_SEG_LABELS) */
-    int slice_window;  /**< 1: guess the slice views' window and level (info->window) */
+    const char *field;   /**< a grid's field (NULL: its first scalar field) */
+    double step;         /**< > 0: every object's sample step (units of the smallest spacing) */
+    int has_attenuation; /**< 1: every volume and grid object's attenuation is `attenuation` */
+    double attenuation;  /**< >= 0: VV_MODE_ATTENUATED_MIP's attenuation (vv_object) */
+    int labels;          /**< 1: every volume object a label volume (VV_SEG_LABELS) */
+    int slice_window;    /**< 1: guess the slice views' window and level (info->window) */
     /* long work */
     const vv_progress *progress;   /**< voxelizing a scene's geometry; may be NULL */
     vv_filter_cache *filter_cache; /**< a scene's filtered volumes (NULL: none kept) */

@@ -41,7 +41,7 @@ def option_text(value):
 
 _OPTION_TYPES = {0: "bool", 1: "int", 2: "real", 3: "enum", 4: "string"}
 _KINDS = ["volume", "plane", "polygon", "sphere", "box", "cylinder", "mesh", "grid"]
-_MODES = ["composite", "mip", "minip", "xray", "iso"]
+_MODES = ["composite", "mip", "minip", "xray", "iso", "attenuated-mip"]
 _CAPS = ["region", "quality", "preview", "progressive", "global", "channels"]
 
 
@@ -207,7 +207,8 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     than the cache holds: a render without progressive streams the rest).
     renderer: a registry name (``volvis.renderers``), a :class:`Renderer`
     (keeps its caches between calls), or None: the World's render settings,
-    else "raycast". mode: "composite", "mip", "minip", "xray" or "iso" for
+    else "raycast". mode: "composite", "mip", "minip", "xray", "iso" or
+    "attenuated-mip" for
     every volume and grid object (on a snapshot; the World is unchanged).
     size: (width, height) in pixels, default the view's. quality: 0 draft ..
     2 final (default the World's, else 2). view: a :class:`View` in place of

@@ -58,7 +58,7 @@ JPEG_STILL = 90
 #: Chunks a reduced frame of a file out of core may read (SRV_PROGRESSIVE_CHUNKS).
 PROGRESSIVE_CHUNKS = 64
 
-_MODES = ("composite", "mip", "minip", "xray", "iso")
+_MODES = ("composite", "mip", "minip", "xray", "iso", "attenuated-mip")
 _AXES = ("axial", "coronal", "sagittal")
 _MOTIONS = {"rotate": "VV_NAV_ROTATE", "pan": "VV_NAV_PAN", "zoom": "VV_NAV_ZOOM"}
 
@@ -109,7 +109,8 @@ class View(anywidget.AnyWidget):
     Synchronised properties (set them from Python to re-render; read them
     after the user drags to get the new values): ``eye``, ``at``, ``up``
     (world units, [x, y, z]) and ``fov`` (degrees): the World's camera
-    (vv_view); ``mode`` ("composite", "mip", "minip", "xray", "iso") of every
+    (vv_view); ``mode`` ("composite", "mip", "minip", "xray", "iso",
+    "attenuated-mip") of every
     volume object; ``preset`` (a :func:`volvis.tf_presets` name placed on
     each volume's values, or "": the transfer functions the World had, or the
     last ``tf`` set);

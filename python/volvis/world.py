@@ -535,7 +535,8 @@ class TransferFunction2D(_Struct):
 
 # ---- objects -----------------------------------------------------------------
 _MODES = {"composite": lib.VV_MODE_COMPOSITE, "mip": lib.VV_MODE_MIP,
-          "minip": lib.VV_MODE_MINIP, "xray": lib.VV_MODE_XRAY, "iso": lib.VV_MODE_ISO}
+          "minip": lib.VV_MODE_MINIP, "xray": lib.VV_MODE_XRAY, "iso": lib.VV_MODE_ISO,
+          "attenuated-mip": lib.VV_MODE_ATTENUATED_MIP}
 _MODE_NAMES = {v: k for k, v in _MODES.items()}
 _SEGS = {"tf": lib.VV_SEG_TRANSFER_FUNCTION, "threshold": lib.VV_SEG_THRESHOLD,
          "tf2d": lib.VV_SEG_TRANSFER_FUNCTION_2D, "labels": lib.VV_SEG_LABELS}
@@ -645,7 +646,8 @@ class Object:
 
     @property
     def mode(self):
-        """"composite", "mip", "minip", "xray" or "iso"."""
+        """"composite", "mip", "minip", "xray", "iso" or "attenuated-mip"
+        (napari's attenuated MIP, drawn by raycast; see ``attenuation``)."""
         return _MODE_NAMES.get(self._c.mode, "composite")
 
     @mode.setter
@@ -684,6 +686,8 @@ class Object:
 
     threshold = _num_prop("threshold", "Threshold segmentation: opaque where value >= it.")
     isovalue = _num_prop("isovalue", "Iso mode: the isovalue.")
+    attenuation = _num_prop("attenuation", "Attenuated-mip mode: napari's attenuation (>= 0, "
+                            "default 0.05; 0 gives MIP).", lo=0)
     step = _num_prop("step", "Sample step in units of the smallest voxel spacing (> 0).",
                      lo=1e-6)
     shading = _bool_prop("shading", "Phong shading from gradients (False: emission only).")
@@ -1028,7 +1032,7 @@ class World:
         InvalidError).
 
         Overrides of the guessed appearance: mode ("composite", "mip",
-        "minip", "xray", "iso"), tf (lo, hi) the transfer function's data
+        "minip", "xray", "iso", "attenuated-mip"), tf (lo, hi) the transfer function's data
         range (a scene's stretched onto it), iso the isovalue, size
         (width, height) pixels of the view, renderer the method that will
         draw it (the automatic out-of-core switch needs one with the region

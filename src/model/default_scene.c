@@ -186,7 +186,8 @@ grey_tf(vv_tf *tf, double lo, double hi, double unit) {
 
 static int
 is_projection_mode(vv_render_mode m) {
-    return m == VV_MODE_MIP || m == VV_MODE_MINIP || m == VV_MODE_XRAY;
+    return m == VV_MODE_MIP || m == VV_MODE_MINIP || m == VV_MODE_XRAY ||
+           m == VV_MODE_ATTENUATED_MIP;
 }
 
 /* @p v's value range made usable: [0, 1] when not finite, one wide when empty. */
@@ -310,7 +311,7 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
     }
     if (!volume)
         return vv_error_set(VV_ERR_INVALID, "default scene: NULL volume");
-    if (opt->mode < VV_MODE_COMPOSITE || opt->mode > VV_MODE_ISO)
+    if (opt->mode < VV_MODE_COMPOSITE || opt->mode >= VV_MODE_COUNT)
         return vv_error_set(VV_ERR_INVALID, "default scene: unknown mode %d", (int)opt->mode);
     if (opt->width < 1 || opt->width > 32768 || opt->height < 1 || opt->height > 32768)
         return vv_error_set(VV_ERR_INVALID, "default scene: image size %dx%d outside 1..32768",
@@ -403,7 +404,7 @@ vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time
     }
     if (!grid)
         return vv_error_set(VV_ERR_INVALID, "default scene: NULL grid");
-    if (opt->mode < VV_MODE_COMPOSITE || opt->mode > VV_MODE_ISO)
+    if (opt->mode < VV_MODE_COMPOSITE || opt->mode >= VV_MODE_COUNT)
         return vv_error_set(VV_ERR_INVALID, "default scene: unknown mode %d", (int)opt->mode);
     if (opt->width < 1 || opt->width > 32768 || opt->height < 1 || opt->height > 32768)
         return vv_error_set(VV_ERR_INVALID, "default scene: image size %dx%d outside 1..32768",

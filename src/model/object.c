@@ -53,6 +53,7 @@ object_defaults(vv_object *o) {
     o->segmentation = VV_SEG_TRANSFER_FUNCTION;
     o->mode = VV_MODE_COMPOSITE;
     o->step = 0.5;
+    o->attenuation = 0.05;
     o->shading = 1;
     o->visible = 1;
     o->casts_shadows = 1;

@@ -380,6 +380,11 @@ vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_
     if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "object '%s': solid textures are not rendered by regions", obj->name);
+    if (obj->mode == VV_MODE_ATTENUATED_MIP)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': attenuated-mip is not rendered by regions (out of core, "
+                            "bricked or MPI): a sample's attenuation sums the whole ray before it",
+                            obj->name);
     *op = vv_region_op_for(obj->mode);
     return VV_OK;
 }

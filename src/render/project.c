@@ -243,6 +243,47 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
     *depth = (float)tbest;
 }
 
+void
+vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv_vatten *a,
+                       float *value, float *depth) {
+    double k = vv_ceil_pos(r->t0 / dt);
+    const double kend = vv_floor_pos(r->t1 / dt);
+    if (k > kend) {
+        /* one sample: S is its own normalised value */
+        const float v = middle_sample(c, r, depth);
+        float n = (v - a->lo) * a->inv_range;
+        n = n < 0 ? 0 : n > 1 ? 1 : n;
+        const float f = (float)exp(-a->k * ((double)n - 1.0));
+        *value = v * f + a->qoff * (f - 1);
+        return;
+    }
+    double sum = 0;
+    float best = -INFINITY;
+    double tbest = k * dt;
+    /* (a real maximum below 0 grows as its scale shrinks: no bound) */
+    const int stop = (double)a->vmax + (double)a->qoff >= 0;
+    for (; k <= kend; k++) {
+        float p[3];
+        vv_vray_point(r, k * dt, p);
+        const float v = vv_vcache_sample(c, p);
+        float n = (v - a->lo) * a->inv_range;
+        n = n < 0 ? 0 : n > 1 ? 1 : n;
+        sum += n;
+        /* (v + qoff) f - qoff, written so that f == 1 gives v exactly */
+        const float f = a->k == 0 ? 1.0f : (float)exp(-a->k * (sum - 1.0));
+        const float x = v * f + a->qoff * (f - 1);
+        if (x > best) {
+            best = x;
+            tbest = k * dt;
+        }
+        /* every later sample is at most vmax, scaled by at most f */
+        if (stop && a->vmax * f + a->qoff * (f - 1) <= best)
+            break;
+    }
+    *value = best;
+    *depth = (float)tbest;
+}
+
 double
 vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt, float iso,
                   int avx2, int cont) {

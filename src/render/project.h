@@ -157,6 +157,31 @@ void vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *cons
                               const vv_vray *r, double dt, int skipping, int avx2, float *value,
                               float *depth);
 
+/* What napari's attenuated maximum intensity projection
+ * (VV_MODE_ATTENUATED_MIP) takes from the object: the transfer function's
+ * contrast limits [lo, lo + 1 / inv_range] in stored units (real value -
+ * qoff), the cache's offset qoff, its largest stored value vmax, and
+ * k = attenuation / relative step (the step in units of the smallest voxel
+ * spacing). */
+typedef struct vv_vatten {
+    float lo, inv_range, qoff, vmax;
+    double k;
+} vv_vatten;
+
+/* The attenuated maximum intensity projection of ray r (napari's, VisPy's
+ * volume shader): over the samples t = j dt in order (one in the middle of
+ * a ray shorter than a step), S accumulates each sample's normalised value
+ * clamp((v - lo) * inv_range, 0, 1); the sample's real value v + qoff is
+ * scaled by exp(-k (S - 1)), S including the sample itself, and the largest
+ * scaled value (back in stored units) is *value, the parameter of its first
+ * sample *depth. With k == 0 every scale is exactly 1 and the result is the
+ * plain maximum. The sum needs every sample up to the last that can win:
+ * the scale only shrinks along the ray, so once vmax at the current scale
+ * (real vmax + qoff >= 0) cannot beat the maximum the march stops (the same
+ * result). Thread-safe. */
+void vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv_vatten *a,
+                            float *value, float *depth);
+
 /* The first crossing of @p iso along ray r (step dt) through the runs of
  * visible subvolumes (@p bdist of tables made for iso mode: a subvolume is
  * hidden when its values all lie below iso): the sample values in

@@ -340,11 +340,12 @@ renderer_info_draws(const vv_renderer_info *info, const vv_object *obj) {
     return !has_mode(obj->type) || (info->modes & VV_MODE_BIT(obj->mode)) != 0;
 }
 
-static const char *const mode_names[] = {"composite", "mip", "minip", "xray", "iso"};
+static const char *const mode_names[VV_MODE_COUNT] = {"composite", "mip", "minip",
+                                                      "xray",      "iso", "attenuated-mip"};
 
 static const char *
 mode_name(vv_render_mode m) {
-    return (int)m >= 0 && (int)m < 5 ? mode_names[m] : "unknown";
+    return (int)m >= 0 && (int)m < VV_MODE_COUNT ? mode_names[m] : "unknown";
 }
 
 /* The renderers that draw @p obj, comma-separated, into buf. */

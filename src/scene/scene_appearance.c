@@ -395,11 +395,12 @@ parse_material(const sctx *c, json_t *m, const char *mp, vv_material *mat) {
     return parse_material_global(c, m, mp, mat);
 }
 
-const char *const vv_scene_mode_names[5] = {"composite", "mip", "minip", "xray", "iso"};
+const char *const vv_scene_mode_names[VV_MODE_COUNT] = {"composite", "mip", "minip",
+                                                        "xray",      "iso", "attenuated-mip"};
 
 static vv_status
 parse_mode(const sctx *c, const char *op, const char *s, vv_render_mode *out) {
-    for (int i = 0; i < 5; i++) {
+    for (int i = 0; i < VV_MODE_COUNT; i++) {
         if (strcmp(s, vv_scene_mode_names[i]) == 0) {
             *out = (vv_render_mode)i;
             return VV_OK;
@@ -407,7 +408,9 @@ parse_mode(const sctx *c, const char *op, const char *s, vv_render_mode *out) {
     }
     char kp[PATH_MAX_LEN];
     vv_scene_path_key(kp, op, "mode");
-    return vv_scene_serr(c, kp, "unknown mode \"%s\"; expected composite, mip, minip, xray or iso",
+    return vv_scene_serr(c, kp,
+                         "unknown mode \"%s\"; expected composite, mip, minip, xray, iso or "
+                         "attenuated-mip",
                          s);
 }
 
@@ -599,6 +602,8 @@ vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object
     if ((st = vv_scene_get_number(c, e, op, "isovalue", &o->isovalue, &has_iso)) != VV_OK ||
         (st = vv_scene_get_number_in(c, e, op, "step", &o->step, NULL, 0, 1, INFINITY, 1)) !=
             VV_OK ||
+        (st = vv_scene_get_number_in(c, e, op, "attenuation", &o->attenuation, NULL, 0, 0, INFINITY,
+                                     1)) != VV_OK ||
         (st = vv_scene_get_bool(c, e, op, "shading", &o->shading)) != VV_OK ||
         (st = vv_scene_get_bool(c, e, op, "visible", &o->visible)) != VV_OK ||
         (st = vv_scene_get_vec3(c, e, op, "position", &o->position, NULL)) != VV_OK)

@@ -52,7 +52,7 @@ typedef struct sctx {
 void vv_scene_sources_clear(scene_sources *s);
 
 /** The render modes' names in scene files, by vv_render_mode. */
-extern const char *const vv_scene_mode_names[5];
+extern const char *const vv_scene_mode_names[VV_MODE_COUNT];
 
 /* @p v scaled to unit length, or @p v itself when it already is to within
  * rounding (|v|^2 within 8 epsilon of 1): normalizing a normalized vector

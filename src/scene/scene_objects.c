@@ -34,7 +34,8 @@ vv_status
 vv_scene_check_object_keys(const sctx *c, json_t *e, const char *op, const char *const *own,
                            int volume_like) {
     static const char *const head[] = {"name", "type", NULL};
-    static const char *const volume_head[] = {"mode", "isovalue", "step", "shading", NULL};
+    static const char *const volume_head[] = {"mode", "isovalue", "attenuation",
+                                              "step", "shading",  NULL};
     static const char *const place[] = {"visible",     "position", "rotation",
                                         "orientation", "scale",    NULL};
     static const char *const volume_mid[] = {"transfer_function", "segmentation", "tf2d",

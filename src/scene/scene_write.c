@@ -382,8 +382,11 @@ object(wctx *c, const vv_object *o, const char *file) {
     }
     put_transform(c, oj, o);
     int mode = (int)o->mode;
-    put_str(c, oj, "mode", vv_scene_mode_names[mode >= 0 && mode < 5 ? mode : 0], "a mode");
+    put_str(c, oj, "mode", vv_scene_mode_names[mode >= 0 && mode < VV_MODE_COUNT ? mode : 0],
+            "a mode");
     put(c, oj, "isovalue", num(o->isovalue));
+    if (o->mode == VV_MODE_ATTENUATED_MIP || o->attenuation != 0.05)
+        put(c, oj, "attenuation", num(o->attenuation)); /* (older files have none) */
     put(c, oj, "step", num(o->step));
     put(c, oj, "shading", json_boolean(o->shading));
     put(c, oj, "visible", json_boolean(o->visible));

@@ -515,6 +515,8 @@ finish(const vv_world_open_options *o, vv_world *w, vv_world_open_info *info) {
             continue;
         if (o->step > 0)
             obj->step = o->step;
+        if (o->has_attenuation)
+            obj->attenuation = o->attenuation;
         if (o->labels && obj->type == VV_OBJECT_VOLUME)
             obj->segmentation = VV_SEG_LABELS;
         if (obj->visible && obj->source)

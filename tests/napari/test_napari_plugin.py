@@ -182,6 +182,91 @@ def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin
     print("PSNR %s: %.2f dB, %.2f dB after the turn" % (rendering, p1, p2))
 
 
+def test_widget_attenuated_mip(make_napari_viewer, qtbot, plugin, out_dir):
+    """A layer in napari's attenuated_mip is drawn in VolVis's attenuated-mip
+    mode with its attenuation (a numpy layer, in memory): the frame equals
+    `volvis render --mode attenuated-mip --attenuation A` of the same data
+    and view, differs from mip, and re-renders when the attenuation
+    changes."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    vol = volvis.open(str(DATA / "neghip.slc"))
+    v = make_napari_viewer()
+    L = v.add_image(np.array(vol.array), scale=tuple(vol.spacing)[::-1],
+                    translate=tuple(vol.origin)[::-1], colormap="inferno",
+                    contrast_limits=(20, 200), rendering="attenuated_mip")
+    L.attenuation = 0.1
+    v.dims.ndisplay = 3
+    v.reset_view()
+    viewer_camera(v).angles = (0, 25, 70)
+    w = VolVisWidget(v, max_side=160, debounce_ms=10)
+    img = _final(qtbot, w, 0)
+    f = dict(w.frame)
+    (o,) = f["world"].objects
+    assert o.mode == "attenuated-mip" and o.attenuation == pytest.approx(0.1)
+    assert not f["notes"], f["notes"]
+    volvis.save_png(img, str(out_dir / "widget_attenuated_mip.png"))
+
+    def cli_ref(name, mode, att):
+        scene = out_dir / (name + ".json")
+        wc = f["world"].clone()
+        wc.view = f["view"]
+        wc.save(str(scene), volume_files=[str(DATA / "neghip.slc")])
+        png = out_dir / (name + "_cli.png")
+        subprocess.run([cli(), "render", str(scene), "--mode", mode, "--attenuation", str(att),
+                        "--size", "%dx%d" % f["view"].size, "-o", str(png)],
+                       check=True, capture_output=True)
+        ref = volvis.read_png(str(png))
+        return ref[:, ::-1] if f["mirror"] else ref
+
+    p = psnr(img, cli_ref("attenuated", "attenuated-mip", 0.1))
+    assert p >= 40, "attenuated_mip: widget vs volvis render: %.2f dB" % p
+    assert psnr(img, cli_ref("attenuated_as_mip", "mip", 0.1)) < 30, "drawn as mip"
+    assert img[..., :3].max() > 50, "a black frame"
+    n = w.finals
+    L.attenuation = 0.4
+    qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+    assert w.frame["world"].objects[0].attenuation == pytest.approx(0.4)
+    assert psnr(img, w.image) < 35, "the frame did not change with the attenuation"
+    print("PSNR attenuated_mip: %.2f dB" % p)
+
+
+@pytest.mark.parametrize("rendering", ["mip", "translucent"])
+def test_widget_additive_blending(make_napari_viewer, qtbot, plugin, out_dir, rendering):
+    """Two additive layers in memory on one grid are summed, as napari adds
+    them: one object of two channels (VolVis's maximum rule for mip, its
+    additive rule for translucent), whose frame is the sum of the frames of
+    each layer alone."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    a = np.array(volvis.open(str(DATA / "neghip.slc")).array)
+    v = make_napari_viewer()
+    layers = [v.add_image(d, colormap=c, contrast_limits=(0, 255), rendering=rendering,
+                          blending="additive", opacity=0.8)
+              for d, c in ((a, "green"), (np.ascontiguousarray(a[:, :, ::-1]), "magenta"))]
+    v.dims.ndisplay = 3
+    v.reset_view()
+    viewer_camera(v).angles = (0, 20, 75)
+    w = VolVisWidget(v, max_side=128, debounce_ms=10)
+    both = _final(qtbot, w, 0)
+    volvis.save_png(both, str(out_dir / ("widget_additive_%s.png" % rendering)))
+    both = both.astype(int)
+    (o,) = w.frame["world"].objects
+    assert o._c.n_channels == 2 and not w.frame["notes"], w.frame["notes"]
+    alone = []
+    for k in (0, 1):
+        n = w.finals
+        layers[k].visible = True
+        layers[1 - k].visible = False
+        qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+        alone.append(w.image.astype(int))
+        assert not w.frame["notes"]  # one layer over black: nothing to add to
+
+    want = np.minimum(alone[0] + alone[1], 255)[..., :3]
+    err = np.abs(both[..., :3] - want)
+    assert err.max() <= 2, "additive %s: the sum differs by up to %d" % (rendering, err.max())
+    assert (alone[0][..., 1] > 40).any() and (alone[1][..., 0] > 40).any()
+    print("additive %s: sum within %d levels" % (rendering, err.max()))
+
+
 def test_camera_mapping_against_napari_canvas(make_napari_viewer, qtbot, plugin, out_dir):
     """The widget's view of napari's camera against napari's own 3-D canvas
     (VisPy, OpenGL under Xvfb): MIP of neghip, several camera angles and a
@@ -460,7 +545,8 @@ def test_open_bigdataviewer_and_imaris(make_napari_viewer, plugin, hdf5_files):
 
 @pytest.mark.parametrize("rendering,mode", [("translucent", "composite"), ("mip", "mip"),
                                             ("minip", "minip"), ("average", "xray"),
-                                            ("iso", "iso"), ("attenuated_mip", "mip")])
+                                            ("iso", "iso"),
+                                            ("attenuated_mip", "attenuated-mip")])
 def test_layer_transfer_function(make_napari_viewer, rendering, mode):
     """The layer's colormap, contrast limits, gamma and opacity as the
     transfer function evaluates them (vv_tf_eval_*), at data values between
@@ -470,8 +556,9 @@ def test_layer_transfer_function(make_napari_viewer, rendering, mode):
     L = v.add_image(np.zeros((4, 5, 6), np.uint16), colormap="magma", contrast_limits=(100, 900),
                     gamma=0.6, opacity=0.7, rendering=rendering, iso_threshold=500)
     obj, pyr, note = layer_object(L)
-    assert pyr is None and obj.mode == mode
-    assert bool(note) == (rendering == "attenuated_mip")
+    assert pyr is None and obj.mode == mode and not note
+    if mode == "attenuated-mip":
+        assert obj.attenuation == pytest.approx(L.attenuation) and obj.step == 0.8
     pts = (obj.tf.color[:, 0] - 100) / 800
     assert len(pts) == len(obj.tf.opacity) <= 130
     t = 0.5 * (pts[1:] + pts[:-1])  # midway between the table's points

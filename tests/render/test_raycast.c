@@ -16,6 +16,7 @@
  */
 #include "testutil.h"
 
+#include "render/frame.h"
 #include "render/kernels_avx2.h"
 #include "render/project.h"
 #include "render/shade.h"
@@ -450,6 +451,186 @@ test_projection_flat_ends(void **state) {
             vv_image_free(on);
             vv_image_free(off);
         }
+}
+
+/* ---------------------------------------------------------------------- */
+/* Attenuated MIP (napari's)                                                */
+
+/* napari's attenuated MIP of one column, computed here from its formula
+ * (VisPy's volume shader): the samples front to back, S the running sum of
+ * clamp((v - lo) / (hi - lo), 0, 1), each value scaled by
+ * exp(-att (S - 1) / step), the largest scaled value; *at the index of its
+ * sample. */
+static double
+napari_attenuated_mip(const double *vals, int n, double lo, double hi, double att, double step,
+                      int *at) {
+    double sum = 0, best = -INFINITY;
+    for (int i = 0; i < n; i++) {
+        double u = (vals[i] - lo) / (hi - lo);
+        sum += u < 0 ? 0 : u > 1 ? 1 : u;
+        const double x = vals[i] * exp(-att * (sum - 1) / step);
+        if (x > best) {
+            best = x;
+            *at = i;
+        }
+    }
+    return best;
+}
+
+/* A bright voxel (1.0, at z = 5) behind a dimmer slab (0.6, z = 14..21) in
+ * every column of a 16 x 16 x 24 volume, seen down -z: every pixel shows
+ * napari's value through a grey ramp over the contrast limits [0.1, 1]
+ * (the transfer function's first and last opacity points). A small
+ * attenuation lets the bright voxel win, napari's default and a large one
+ * hide it behind the slab. */
+static void
+test_attenuated_mip_analytic(void **state) {
+    (void)state;
+    const int n = 16, d = 24;
+    double col[24];
+    for (int k = 0; k < d; k++)
+        col[k] = k == 5 ? 1.0 : k >= 14 && k <= 21 ? 0.6 : 0.0;
+    vv_volume *v = new_volume(n, n, d, VV_F32, 1, 1, 1);
+    for (int k = 0; k < d; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++)
+                vv_volume_set(v, i, j, k, col[k]);
+    vv_volume_update_range(v);
+    const double lo = 0.1, hi = 1.0, step = 0.5;
+    /* the samples along a column: z = d - 1 down to 0 by half a voxel
+     * (t = k dt from the eye at z = 64), linear between the voxels */
+    double samples[2 * 24];
+    int ns = 0;
+    for (int h = 2 * (d - 1); h >= 0; h--)
+        samples[ns++] = h % 2 ? 0.5 * (col[h / 2] + col[h / 2 + 1]) : col[h / 2];
+    const double atts[3] = {0.01, 0.05, 0.5};
+    vv_renderer *r = new_raycaster();
+    vv_view view = ortho_z(0.5 * (n - 1), 0.5 * (n - 1), 64.0, n, n, n);
+    for (int a = 0; a < 3; a++) {
+        vv_world *w = new_world();
+        vv_object *o = add_object(w, v, VV_MODE_ATTENUATED_MIP);
+        o->step = step;
+        o->attenuation = atts[a];
+        vv_tf_init(&o->tf);
+        vt_ok(vv_tf_add_opacity(&o->tf, lo, 1.0));
+        vt_ok(vv_tf_add_opacity(&o->tf, hi, 1.0));
+        vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 0)));
+        vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 1)));
+        int at = -1;
+        const double want = napari_attenuated_mip(samples, ns, lo, hi, atts[a], step, &at);
+        double grey = (want - lo) / (hi - lo);
+        grey = grey < 0 ? 0 : grey > 1 ? 1 : grey;
+        /* the bright voxel's sample is number 2 (d - 1 - 5) */
+        const int bright = at == 2 * (d - 1 - 5);
+        if (a == 0)
+            assert_true(bright);
+        else
+            assert_false(bright);
+        vv_image *img = render(r, w, &view);
+        const double tol = 1.0 / (hi - lo) / 4095 + 1e-5; /* one entry of the 4096 table */
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++) {
+                const float *p = px(img, x, y);
+                if (!(fabs(p[0] - grey) <= tol))
+                    fail_msg("attenuation %.2f pixel (%d, %d): napari's value %.6f (grey %.6f, "
+                             "sample %d), got grey %.6f",
+                             atts[a], x, y, want, grey, at, (double)p[0]);
+                assert_float_equal(p[3], 1.0, 0);
+            }
+        print_message("attenuated MIP, attenuation %.2f: napari's value %.5f at sample %d (%s), "
+                      "pixel grey %.5f\n",
+                      atts[a], want, at, bright ? "the bright voxel" : "the slab",
+                      (double)px(img, 3, 3)[0]);
+        vv_image_free(img);
+        vv_world_free(w);
+    }
+    vv_renderer_free(r);
+    vv_volume_free(v);
+}
+
+/* Attenuation 0 scales every sample by exactly 1: the image of MIP bit for
+ * bit (colours; MIP's depth may name an earlier sample of the same colour),
+ * for 16-bit and float volumes and a ramp with flat ends (MIP then starts
+ * at one end and stops at the other). */
+static void
+test_attenuated_mip_zero_is_mip(void **state) {
+    (void)state;
+    const vv_voxel_type types[2] = {VV_U16, VV_F32};
+    for (int t = 0; t < 2; t++) {
+        const int n = 32, d = 24;
+        vv_volume *v = new_volume(n, n, d, types[t], 1, 1, 1);
+        uint64_t seed = 0x243f6a8885a308d3ULL + (uint64_t)t;
+        for (int k = 0; k < d; k++)
+            for (int j = 0; j < n; j++)
+                for (int i = 0; i < n; i++) {
+                    double x = rnd(&seed);
+                    if (k > 8 && k < 16 && i > 16)
+                        x *= 0.3;
+                    vv_volume_set(v, i, j, k,
+                                  types[t] == VV_F32 ? 1000 * x - 200 : floor(4000 * x));
+                }
+        vv_volume_update_range(v);
+        const double lo = v->range[0], hi = v->range[1];
+        vv_image *img[2];
+        for (int m = 0; m < 2; m++) {
+            vv_world *w = new_world();
+            vv_object *o = add_object(w, v, m ? VV_MODE_ATTENUATED_MIP : VV_MODE_MIP);
+            o->attenuation = 0;
+            vv_tf_init(&o->tf);
+            vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.3 * (hi - lo), 0.2));
+            vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.97 * (hi - lo), 1.0));
+            vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 1)));
+            vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 0)));
+            /* a turned view: rays not along the grid */
+            vv_view view = ortho_z(0.5 * (n - 1), 0.5 * (n - 1), 64.0, 1.5 * n, 48, 40);
+            view.at = vv_vec3_make(0.5 * (n - 1), 0.5 * (n - 1), 0.5 * (d - 1));
+            view.eye = vv_vec3_make(0.5 * (n - 1) + 30, 0.5 * (n - 1) + 17, 60);
+            vv_renderer *r = new_raycaster();
+            img[m] = render(r, w, &view);
+            vv_renderer_free(r);
+            vv_world_free(w);
+        }
+        const size_t np = (size_t)img[0]->width * (size_t)img[0]->height;
+        if (memcmp(img[0]->rgba, img[1]->rgba, 4 * np * sizeof(float)) != 0)
+            fail_msg("%s: attenuation 0 differs from MIP by up to %.3g",
+                     vv_voxel_type_name(types[t]), max_abs_diff(img[0], img[1]));
+        double lit = 0;
+        for (size_t i = 0; i < np; i++)
+            lit += img[0]->rgba[4 * i + 3] > 0;
+        assert_true(lit > 0.2 * (double)np); /* not an empty image */
+        vv_image_free(img[0]);
+        vv_image_free(img[1]);
+        vv_volume_free(v);
+    }
+}
+
+/* Renderers that do not draw attenuated MIP refuse it in one line, naming
+ * the one that does; a region render (out of core, MPI) refuses it too. */
+static void
+test_attenuated_mip_refused(void **state) {
+    (void)state;
+    vv_volume *v = constant_volume(8, 8, 8, VV_U8, 1, 1, 1, 100);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_ATTENUATED_MIP);
+    vv_volume_free(v);
+    (void)o;
+    vv_view view = ortho_z(3.5, 3.5, 64, 10, 8, 8);
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raytrace"));
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, 8, 8));
+    assert_int_equal(vv_renderer_render(r, w, &view, NULL, img), VV_ERR_UNSUPPORTED);
+    const char *msg = vv_error_message();
+    assert_non_null(strstr(msg, "attenuated-mip mode is not drawn by raytrace (drawn by raycast"));
+    assert_null(strchr(msg, '\n'));
+    vv_renderer_free(r);
+    vv_region_op op;
+    vv_render_region rg;
+    memset(&rg, 0, sizeof rg);
+    assert_int_equal(vv_render_region_check(w, &rg, &op), VV_ERR_UNSUPPORTED);
+    assert_non_null(strstr(vv_error_message(), "attenuated-mip is not rendered by regions"));
+    vv_image_free(img);
+    vv_world_free(w);
 }
 
 static void
@@ -1854,6 +2035,9 @@ main(void) {
         cmocka_unit_test(test_slab_sample_count),
         cmocka_unit_test(test_early_termination),
         cmocka_unit_test(test_mip_columns),
+        cmocka_unit_test(test_attenuated_mip_analytic),
+        cmocka_unit_test(test_attenuated_mip_zero_is_mip),
+        cmocka_unit_test(test_attenuated_mip_refused),
         cmocka_unit_test(test_projection_flat_ends),
         cmocka_unit_test(test_minip_columns),
         cmocka_unit_test(test_xray_columns),

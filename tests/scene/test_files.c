@@ -137,7 +137,7 @@ static const char *every_key =
     "     \"segmentation\": {\"threshold\": -300},\n"
     "     \"material\": {\"color\": [0.9, 0.8, 0.7], \"shininess\": 5}},\n"
     "    {\"name\": \"second\", \"file\": \"ct_head.nrrd\", \"orientation\": [0, 1, 0, 0],\n"
-    "     \"scale\": [1, 2, 3], \"mode\": \"mip\", \"step\": 0.25},\n"
+    "     \"scale\": [1, 2, 3], \"mode\": \"mip\", \"step\": 0.25, \"attenuation\": 0.2},\n"
     "    {\"file\": \"ct_head.nrrd\", \"mode\": \"minip\"},\n"
     "    {\"file\": \"ct_head.nrrd\", \"mode\": \"xray\", \"transfer_function\": {\"opacity\": "
     "[]}}\n"
@@ -193,7 +193,9 @@ test_every_key(void **state) {
     assert_near(o->scale.y, 2, 0);
     assert_int_equal(o->mode, VV_MODE_MIP);
     assert_near(o->step, 0.25, 0);
-    assert_true(o->tf.n_opacity >= 2); /* the default grey ramp */
+    assert_near(o->attenuation, 0.2, 0);
+    assert_near(w->objects[2]->attenuation, 0.05, 0); /* the default */
+    assert_true(o->tf.n_opacity >= 2);                /* the default grey ramp */
     assert_int_equal(w->objects[2]->mode, VV_MODE_MINIP);
     assert_int_equal(w->objects[3]->mode, VV_MODE_XRAY);
     assert_int_equal(w->objects[3]->tf.n_opacity, 0);
@@ -242,6 +244,7 @@ compare_worlds(const vv_world *a, const vv_world *b) {
         assert_int_equal(p->mode, q->mode);
         assert_near(p->isovalue, q->isovalue, 0);
         assert_near(p->step, q->step, 0);
+        assert_near(p->attenuation, q->attenuation, 0);
         assert_int_equal(p->shading, q->shading);
         assert_int_equal(p->visible, q->visible);
         assert_int_equal(p->segmentation, q->segmentation);
@@ -351,6 +354,12 @@ test_errors(void **state) {
     expect_error("color.json", "{\"view\": {\"background\": [0, 2, 0]}}", 1, 11, "outside [0, 1]");
     expect_error("step.json", "{\"objects\": [{\"file\": \"ct_head.nrrd\", \"step\": 0}]}", 1, 39,
                  "objects[0].step");
+    expect_error("attenuation.json",
+                 "{\"objects\": [{\"file\": \"ct_head.nrrd\", \"attenuation\": -1}]}", 1, 39,
+                 "objects[0].attenuation: -1 is outside");
+    expect_error("mode_am.json",
+                 "{\"objects\": [{\"file\": \"ct_head.nrrd\",\n \"mode\": \"attenuated_mip\"}]}", 2,
+                 2, "expected composite, mip, minip, xray, iso or attenuated-mip");
     expect_error("normal.json",
                  "{\"cut_planes\": [{\"point\": [0, 0, 0],\n \"normal\": [0, 0, 0]}]}", 2, 2,
                  "cut_planes[0].normal: must not be the zero vector");

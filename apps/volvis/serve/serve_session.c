@@ -276,6 +276,8 @@ mode_name(vv_render_mode m) {
         return "minip";
     case VV_MODE_XRAY:
         return "xray";
+    case VV_MODE_ATTENUATED_MIP:
+        return "attenuated-mip";
     default:
         return "other";
     }

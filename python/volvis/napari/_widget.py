@@ -14,15 +14,31 @@ What it maps (napari -> VolVis, each layer one volume object of a World):
 - rendering: translucent -> composite (emission-absorption, unshaded),
   mip -> mip, minip -> minip, average -> xray (the mean), iso -> iso at
   ``iso_threshold`` (shaded, in the colormap's colour at the threshold),
-  attenuated_mip -> mip (VolVis has no attenuated MIP: said in the status
-  line), additive -> composite.
+  attenuated_mip -> attenuated-mip (napari's method: the maximum of the
+  sample values scaled by exp(-attenuation (S - 1) / step), S the running
+  sum of the contrast-normalised values) with the layer's ``attenuation``
+  at VisPy's relative step 0.8 (the step napari's exponent divides by); a
+  layer drawn out of core (opened by the VolVis reader) is rendered by
+  regions, which cannot carry the sum along the ray, so there it is drawn
+  as mip, and so it is with shadows (the ray tracer draws no attenuated
+  MIP; both said in the status line); additive -> composite.
 - colormap, contrast limits, gamma, opacity: a transfer function of up to
   130 points over the contrast limits (even in t and in t^gamma), colour ``colormap((t)^gamma)`` at data
   value ``lo + t (hi - lo)``; opacity there ``opacity * t^gamma`` per voxel
   (the smallest spacing) in composite, ``opacity`` in mip, minip and xray.
-- blending: VolVis's own: composite and iso objects are composited along
-  each ray (depth-correct), mip, minip and xray objects combined by the
-  per-channel maximum and shown behind them.
+- blending: ``additive`` layers held in memory on the same grid (shape,
+  scale, translate) and drawn in mip, or in translucent, are combined by
+  their sum, as napari adds them: they become the channels of one
+  multi-channel object under VolVis's ``maximum`` rule (a MIP per channel,
+  the coloured maxima added) or ``additive`` rule (each channel composited
+  on its own, the colours added). Every other case keeps VolVis's own rule
+  for separate objects, which has no sum: composite and iso objects are
+  composited along each ray (depth-correct, which is napari's
+  ``translucent``), mip, minip, xray and attenuated-mip objects combined by
+  the per-channel maximum and shown behind them; a layer whose blending
+  that does not match (``opaque``, ``minimum``, ``translucent_no_depth``,
+  or ``additive`` with nothing on its grid to add to) is named in the
+  status line when more than one object is drawn.
 - camera: ``viewer.camera``'s view and up directions (its angles and
   orientation), centre, zoom and perspective. napari's zoom is canvas
   pixels per world unit, so the view's world height is the canvas height
@@ -56,6 +72,8 @@ from qtpy.QtWidgets import (QCheckBox, QHBoxLayout, QLabel, QPushButton, QSizePo
                             QVBoxLayout, QWidget)
 
 import volvis
+from .._lib import check, cstr
+from .._volvis import ffi, lib
 from ..errors import CancelledError, Error
 from ..volume import VOXEL_TYPES
 from ._reader import level_array
@@ -63,7 +81,11 @@ from ._reader import level_array
 __all__ = ["VolVisWidget", "napari_view", "layer_object"]
 
 _MODES = {"translucent": "composite", "additive": "composite", "mip": "mip",
-          "minip": "minip", "average": "xray", "iso": "iso", "attenuated_mip": "mip"}
+          "minip": "minip", "average": "xray", "iso": "iso",
+          "attenuated_mip": "attenuated-mip"}
+#: VisPy's volume visual's relative step size (its default, which napari
+#: keeps): napari's attenuated MIP divides its exponent by it
+NAPARI_RELATIVE_STEP = 0.8
 
 
 def napari_view(camera, canvas_hw, size, bounds=None):
@@ -142,6 +164,34 @@ def layer_tf(layer, unit_distance):
     return mode, tf, tuple(iso_rgb), rendering
 
 
+#: napari's rendering under additive blending -> VolVis's channel rule that
+#: adds the layers' images (vv_channel_blend)
+_ADDITIVE_RULES = {"mip": lib.VV_BLEND_MAXIMUM, "composite": lib.VV_BLEND_ADDITIVE}
+
+
+def _blending(layer):
+    return str(getattr(layer.blending, "value", layer.blending))
+
+
+def additive_object(objs, names):
+    """One multi-channel :class:`volvis.VolumeObject` adding ``objs`` (2..16
+    in-memory volume objects on one grid, all mip or all composite, from
+    :func:`layer_object`): their volumes its channels, each with its
+    object's transfer function, under VolVis's maximum rule (mip: a MIP per
+    channel, the coloured maxima added) or additive rule (composite: each
+    channel composited alone, the colours added). napari's additive
+    blending of those layers."""
+    base = objs[0]
+    vols = ffi.new("vv_volume *[]", [o._c.volume for o in objs])
+    cnames = [ffi.new("char[]", cstr(n[:60])) for n in names]
+    check(lib.vv_object_set_channels(base._c, len(objs), vols, ffi.new("char *[]", cnames)))
+    for c, o in enumerate(objs):
+        base._c.channels[c].tf = o._c.tf
+    base._c.blend = _ADDITIVE_RULES[base.mode]
+    base.name = "+".join(names)[:60]
+    return base
+
+
 def layer_object(layer, cache=None):
     """A :class:`volvis.VolumeObject` showing napari Image ``layer`` (3-D)
     as the module docstring says; ``cache`` (a dict) keeps in-memory
@@ -174,6 +224,13 @@ def layer_object(layer, cache=None):
         obj = volvis.VolumeObject(v, name=layer.name[:60])
         spacing = scale
     mode, tf, iso_rgb, rendering = layer_tf(layer, float(np.min(spacing)))
+    note = ""
+    if mode == "attenuated-mip" and pyr is not None:
+        mode = "mip"
+        note = "attenuated_mip of an out-of-core layer drawn as mip"
+    elif mode == "attenuated-mip":
+        obj.attenuation = float(getattr(layer, "attenuation", 0.05))
+        obj.step = NAPARI_RELATIVE_STEP
     obj.mode = mode
     obj.tf = tf
     if mode == "iso":
@@ -182,7 +239,6 @@ def layer_object(layer, cache=None):
         obj.shading = True
     else:
         obj.shading = False
-    note = "attenuated_mip drawn as mip" if rendering == "attenuated_mip" else ""
     return obj, pyr, note
 
 
@@ -324,6 +380,8 @@ class VolVisWidget(QWidget):
         from napari.layers import Image
         world = volvis.World()
         pyramids, notes = [], []
+        additive = {}  # (mode, grid) -> [(layer name, object)]: summed layers
+        blend_notes = []
         for layer in self.viewer.layers:
             if not isinstance(layer, Image) or not layer.visible or layer.rgb:
                 continue
@@ -331,11 +389,31 @@ class VolVisWidget(QWidget):
                 notes.append("%s: %d-D, not drawn" % (layer.name, layer.ndim))
                 continue
             obj, pyr, note = layer_object(layer, self._cache)
+            if note:
+                notes.append("%s: %s" % (layer.name, note))
+            blending = _blending(layer)
+            if blending == "additive" and pyr is None and obj.mode in _ADDITIVE_RULES:
+                # summed with the others on its grid (below)
+                key = (obj.mode, tuple(obj.volume.shape), tuple(obj.volume.spacing),
+                       tuple(obj.volume.origin))
+                additive.setdefault(key, []).append((layer.name, obj))
+                continue
             world.add(obj)
             if pyr is not None:
                 pyramids.append(pyr)
-            if note:
-                notes.append("%s: %s" % (layer.name, note))
+            if blending not in ("translucent",):
+                blend_notes.append("%s: blending %s drawn by VolVis's rule"
+                                   % (layer.name, blending))
+        for group in additive.values():
+            if len(group) == 1 or len(group) > lib.VV_MAX_CHANNELS:
+                for name, obj in group:
+                    world.add(obj)
+                    blend_notes.append("%s: blending additive drawn by VolVis's rule (nothing "
+                                       "on its grid to add to)" % name)
+                continue
+            world.add(additive_object([o for _, o in group], [n for n, _ in group]))
+        if len(world.objects) > 1:  # (one object over the background: any rule draws it so)
+            notes += blend_notes
         if len(world.objects) == 0:
             return None
         size = self.frame_size()
@@ -357,6 +435,9 @@ class VolVisWidget(QWidget):
                 obj.casts_shadows = True
                 obj.receives_shadows = True
                 obj.shading = True
+                if obj.mode == "attenuated-mip":  # raytrace draws no attenuated MIP
+                    obj.mode = "mip"
+                    notes.append("%s: attenuated_mip drawn as mip with shadows" % obj.name)
         else:
             world.add_light(headlight=True)
         return world, view, ("raytrace" if shadows else "raycast"), mirror, pyramids, notes

@@ -86,6 +86,7 @@ typedef struct rc_obj {
     vv_vtables tab;  /* the tables lut, bvis, bdist come from */
     int owns_tables; /* tab is this object's (else borrowed from the cache) */
     float iso;
+    vv_vatten att;  /* attenuated MIP: contrast limits, attenuation per relative step */
     vv_vshading sh; /* shading constants */
     int shading;
     const vv_vshade_table *stab; /* shading=table: shaded by this table (else NULL: Phong) */
@@ -888,6 +889,10 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
     vv_vray r;
     if (!ray_setup(ob, wr, &r))
         return 0;
+    if (ob->mode == VV_MODE_ATTENUATED_MIP) {
+        vv_vray_attenuated_mip(ob->c, &r, fr->dt, &ob->att, value, depth);
+        return 1;
+    }
     /* MIP and MinIP need not tell apart values the table shows alike */
     vv_vray_project_tables(ob->c, &ob->tab, &r, ob->mode, fr->dt, fr->st->skipping, fr->avx2, value,
                            depth);
@@ -959,6 +964,30 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
             fr->stats->gradients_at_samples++;
     }
     ro->iso = (float)(obj->isovalue - ro->c->qoff);
+    if (ro->mode == VV_MODE_ATTENUATED_MIP) {
+        if (!(obj->attenuation >= 0) || !isfinite(obj->attenuation))
+            return vv_error_set(VV_ERR_INVALID, "object '%s': attenuation must be >= 0, got %g",
+                                obj->name, obj->attenuation);
+        /* the normalisation of napari's sum, its contrast limits: the span
+         * of the transfer function's opacity points (a contrast ramp's, or
+         * napari's table over its limits), else the volume's range */
+        const vv_tf *tf = &obj->tf;
+        double lo = obj->volume->range[0], hi = obj->volume->range[1];
+        if (tf->n_opacity >= 2 && tf->opacity[tf->n_opacity - 1].value > tf->opacity[0].value) {
+            lo = tf->opacity[0].value;
+            hi = tf->opacity[tf->n_opacity - 1].value;
+        }
+        if (!(hi > lo))
+            hi = lo + 1;
+        ro->att.lo = (float)(lo - ro->c->qoff);
+        ro->att.inv_range = (float)(1.0 / (hi - lo));
+        ro->att.qoff = (float)ro->c->qoff;
+        const vv_vcache *c = ro->c;
+        float vmax = -INFINITY;
+        for (size_t g = 0; g < (size_t)c->gx * (size_t)c->gy * (size_t)c->gz; g++)
+            vmax = c->gmax[g] > vmax ? c->gmax[g] : vmax;
+        ro->att.vmax = vmax;
+    }
     return VV_OK;
 }
 
@@ -1246,6 +1275,13 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
         objs[i].dt = fr.dt;
+        if (objs[i].mode == VV_MODE_ATTENUATED_MIP && !objs[i].nch) {
+            /* napari's relative step: the frame's step in units of the
+             * object's smallest voxel spacing */
+            const vv_object *ob = objs[i].obj;
+            const double rel = fr.dt * ob->step / vv_vobject_step(ob);
+            objs[i].att.k = ob->attenuation / rel;
+        }
         if (objs[i].nch)
             continue; /* its channels have the tables */
         s = prepare_tables(&fr, &objs[i]);
@@ -1419,10 +1455,10 @@ const vv_renderer_ops vv_raycast_ops = {
     .info =
         {
             .name = "raycast",
-            .description = "direct volume ray casting: composite, mip, minip, xray, iso; "
-                           "subvolume skipping",
+            .description = "direct volume ray casting: composite, mip, minip, xray, iso, "
+                           "attenuated-mip; subvolume skipping",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME),
-            .modes = VV_MODES_ALL,
+            .modes = VV_MODES_ALL | VV_MODE_BIT(VV_MODE_ATTENUATED_MIP),
             .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_PREVIEW |
                     VV_RENDERER_CHANNELS,
             .quality = "0 and 1: adaptive refinement from a lattice of every 4th pixel "
