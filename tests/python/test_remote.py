@@ -126,3 +126,19 @@ def test_remote_stats_pending_then_done(served):
     assert 0 < reads <= Drip.requests
     # bytes pending never exceed what is still to come: at most all the server sent
     assert max(s["pending_bytes"] for s in seen) <= Drip.sent
+
+
+def test_scene_names_a_url(served, tmp_path):
+    """A scene whose volume "file" is a URL (a GUI session of a store opened by URL)
+    loads it as it is, never as a path beside the scene, and draws what the same scene
+    naming the store's path draws."""
+    import json
+    local, url = served
+    view = {"width": 64, "height": 64, "eye": [0, -900, 0], "at": [0, 0, 0], "up": [0, 0, 1]}
+    imgs = []
+    for name, f in (("url", url), ("path", str(local))):
+        p = tmp_path / f"{name}.json"
+        p.write_text(json.dumps({"view": view, "objects": [{"file": f, "mode": "mip"}]}))
+        imgs.append(volvis.render(volvis.load_scene(str(p)), alpha=False))
+    assert imgs[1].max() > 0
+    np.testing.assert_array_equal(imgs[0], imgs[1])
