@@ -396,7 +396,7 @@ remote_send(void) {
              (unsigned long long)st.bytes_received);
     for (client_link *l = links; l; l = l->next)
         if (l->c->session)
-            srv_session_send_text(l->c->session, l->c, text);
+            srv_session_send_progress(l->c->session, l->c, text);
 }
 
 static int

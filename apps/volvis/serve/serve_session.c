@@ -217,10 +217,11 @@ reply_json(srv_session *s, uint64_t to, json_t *o) {
 }
 
 void
-srv_session_send_text(srv_session *s, srv_client *c, const char *text) {
+srv_session_send_progress(srv_session *s, srv_client *c, const char *text) {
     srv_buf *b = srv_buf_text(text, strlen(text));
     pthread_mutex_lock(&s->lock);
-    queue_to(c, b);
+    if (c->n_queue < SRV_QUEUE_MAX / 2)
+        queue_to(c, b);
     pthread_mutex_unlock(&s->lock);
     srv_buf_unref(b);
 }
