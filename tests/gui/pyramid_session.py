@@ -281,7 +281,7 @@ def open_url(s, store, out):
     accessible name, its description says what it is), gone once every read is
     answered; the frame then converges. Returns (the converged frame, the session saved of it)."""
     from http_common import drip_server
-    srv, drip = drip_server(os.path.dirname(store), piece=1024, pause=0.006)
+    srv, drip = drip_server(os.path.dirname(store), piece=1024, pause=0.004)
     url = f"http://127.0.0.1:{srv.server_address[1]}/{os.path.basename(store)}"
     try:
         s.focus_main()
