@@ -231,6 +231,13 @@ vvg_document_can_redo(VvgDocument *doc) {
     return vvg_undo_can_redo(doc->undo);
 }
 
+/* @p path made absolute (a new string); a URL as it is: no folder of the
+ * working directory is put before "http://". */
+static char *
+canonical(const char *path) {
+    return vv_path_is_url(path) ? g_strdup(path) : g_canonicalize_filename(path, NULL);
+}
+
 /* The file an object's volume came from, kept in geometry.source as scene
  * loading does, so saving refers to it. */
 static void
@@ -239,7 +246,7 @@ remember_source(vv_object *o, const char *path) {
         return;
     free(o->geometry.source);
     /* malloc'ed: the library frees it with free() */
-    char *abs = g_canonicalize_filename(path, NULL);
+    char *abs = canonical(path);
     size_t n = strlen(abs) + 1;
     o->geometry.source = malloc(n);
     if (o->geometry.source)
@@ -516,7 +523,7 @@ open_input(VvgDocument *doc, const char *path, GError **error) {
     g_autofree char *base = volume_name(path);
     /* before the object, whose "changed" the pages fill from; keyed as
      * remember_source names the file; a file out of core shows its step 0 */
-    g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
+    g_hash_table_replace(doc->time_steps, canonical(path),
                          GINT_TO_POINTER(!info.out_of_core && info.n_times > 1 ? info.n_times : 1));
     return show_default_world(doc, w, base, path);
 }

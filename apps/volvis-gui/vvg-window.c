@@ -11,6 +11,7 @@
 
 #include <glib/gstdio.h>
 
+#include "volvis/io.h"
 #include "volvis/sys/format.h"
 #include "vvg-animator-page.h"
 #include "vvg-channel-panel.h"
@@ -44,6 +45,8 @@ struct _VvgWindow {
     GtkWidget *pages;     /* the side bar's GtkStack */
     GtkWidget *chooser;   /* the side bar's page chooser (GtkDropDown of the titles) */
     GtkWidget *side;      /* the side bar: hidden by the Controls toggle (F9) */
+    GtkWidget *remote;    /* "N chunks, X MB pending" over the views while remote reads wait */
+    guint remote_tick;
     /* a close or quit waiting for Save (As) to finish */
     void (*after_save)(void *user);
     void *after_save_user;
@@ -1164,6 +1167,62 @@ act_controls(GSimpleAction *a, GVariant *value, gpointer user) {
     gtk_widget_set_visible(win->side, g_variant_get_boolean(value));
 }
 
+/* ---- remote data ------------------------------------------------------------------- */
+
+/* The reads of remote stores (HTTP, HTTPS, S3) not yet answered, four
+ * times a second, over the bottom of the views: "12 chunks, 3.4 MB
+ * pending" (kB under a megabyte) while a render or the loader waits for the
+ * network, hidden when nothing is pending (vv_remote_stats_get: the
+ * process's, lock-free). */
+static gboolean
+remote_tick(gpointer user) {
+    VvgWindow *win = user;
+    vv_remote_stats st;
+    vv_remote_stats_get(&st);
+    if (st.pending == 0) {
+        gtk_widget_set_visible(win->remote, FALSE);
+        return G_SOURCE_CONTINUE;
+    }
+    char text[128];
+    const char *what = st.pending == 1 ? "chunk" : "chunks";
+    if (st.pending_bytes >= 1000000)
+        snprintf(text, sizeof text, "%" G_GUINT64_FORMAT " %s, %.1f MB pending", st.pending, what,
+                 (double)st.pending_bytes / 1e6);
+    else if (st.pending_bytes > 0)
+        snprintf(text, sizeof text, "%" G_GUINT64_FORMAT " %s, %.0f kB pending", st.pending, what,
+                 ceil((double)st.pending_bytes / 1e3));
+    else
+        snprintf(text, sizeof text, "%" G_GUINT64_FORMAT " %s pending", st.pending, what);
+    if (strcmp(gtk_label_get_text(GTK_LABEL(win->remote)), text) != 0)
+        gtk_label_set_text(GTK_LABEL(win->remote), text);
+    gtk_widget_set_visible(win->remote, TRUE);
+    return G_SOURCE_CONTINUE;
+}
+
+/* The views with the remote-data line laid over their bottom left corner
+ * (over, not below: the views keep their size when it comes and goes). */
+static GtkWidget *
+views_with_remote_line(VvgWindow *win) {
+    GtkWidget *overlay = gtk_overlay_new();
+    gtk_overlay_set_child(GTK_OVERLAY(overlay), win->area);
+    win->remote = gtk_label_new("");
+    gtk_widget_add_css_class(win->remote, "osd");
+    gtk_widget_set_halign(win->remote, GTK_ALIGN_START);
+    gtk_widget_set_valign(win->remote, GTK_ALIGN_END);
+    gtk_widget_set_margin_start(win->remote, 8);
+    gtk_widget_set_margin_bottom(win->remote, 8);
+    gtk_widget_set_can_target(win->remote, FALSE); /* the view under it keeps its input */
+    /* a label's accessible name is its text (GTK sets it): what it says is
+     * found by that, and what it is by its description */
+    gtk_accessible_update_property(
+        GTK_ACCESSIBLE(win->remote), GTK_ACCESSIBLE_PROPERTY_DESCRIPTION,
+        "reads of remote stores (HTTP, S3) asked for and not yet answered", -1);
+    gtk_widget_set_visible(win->remote, FALSE);
+    gtk_overlay_add_overlay(GTK_OVERLAY(overlay), win->remote);
+    win->remote_tick = g_timeout_add(250, remote_tick, win);
+    return overlay;
+}
+
 /* ---- life cycle --------------------------------------------------------------------- */
 
 static void
@@ -1175,6 +1234,7 @@ vvg_window_dispose(GObject *o) {
         vvg_scene_view_stop(win->scene);
     g_clear_handle_id(&win->autosave_delay, g_source_remove);
     g_clear_handle_id(&win->autosave_tick, g_source_remove);
+    g_clear_handle_id(&win->remote_tick, g_source_remove);
     autosave_wait(win); /* an autosave being written ends first */
     win->autosave_gen++;
     if (win->autosave_dir) { /* closed as the user chose: no crash to restore */
@@ -1240,7 +1300,7 @@ vvg_window_init(VvgWindow *win) {
     gtk_window_set_titlebar(GTK_WINDOW(win), header_bar());
 
     GtkWidget *paned = gtk_paned_new(GTK_ORIENTATION_HORIZONTAL);
-    gtk_paned_set_start_child(GTK_PANED(paned), win->area);
+    gtk_paned_set_start_child(GTK_PANED(paned), views_with_remote_line(win));
     gtk_paned_set_end_child(GTK_PANED(paned), side_bar(win));
     gtk_paned_set_resize_end_child(GTK_PANED(paned), FALSE);
     gtk_paned_set_shrink_end_child(GTK_PANED(paned), FALSE);

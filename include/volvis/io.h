@@ -94,6 +94,35 @@ vv_format vv_format_detect(const char *path);
  */
 int vv_path_is_url(const char *path);
 
+/**
+ * What the remote transport (the HTTP, HTTPS and S3 reads of every store
+ * opened by URL, docs/formats.md "Remote data") has pending and has done,
+ * summed over the process since it started. A "read" is one object or byte
+ * range a reader asked for: a chunk, a shard's index or one of its inner
+ * chunks, a metadata file. Counts, and bytes of HTTP bodies (as sent:
+ * compressed chunks), never of decoded voxels.
+ */
+typedef struct vv_remote_stats {
+    uint64_t pending;        /**< reads asked for and not yet answered (queued or in flight) */
+    uint64_t pending_bytes;  /**< bytes of the pending reads not yet received: a range's
+                                  length, a whole object's once the server says its
+                                  Content-Length (0 before) */
+    uint64_t in_flight;      /**< HTTP requests on the wire now */
+    uint64_t completed;      /**< reads answered: received, absent (404), or failed for good */
+    uint64_t failed;         /**< of those, failed for good (the reader got an error) */
+    uint64_t requests;       /**< HTTP requests sent (each retry and redirect counts) */
+    uint64_t bytes_received; /**< bytes of response bodies received, every try included */
+} vv_remote_stats;
+
+/**
+ * The remote transport's counts now into @p st (a process-wide snapshot;
+ * all zero before the first URL is opened). Each field is read atomically
+ * on its own, so two fields may be a moment apart while reads go on.
+ * Thread-safe, lock-free: a GUI may poll it from its main loop while render
+ * threads read.
+ */
+void vv_remote_stats_get(vv_remote_stats *st);
+
 /** How to read a raw file: nothing in the file describes it. */
 typedef struct vv_raw_params {
     int dims[3];

@@ -21,7 +21,7 @@ from .world import (Box, CutPlane, Cylinder, GridObject, Light, Material, MeshOb
                     Plane, Polygon, Sphere, TransferFunction, TransferFunction2D, View, VolumeObject,
                     World, load_scene, tf_presets)
 from .render import Image, Renderer, RendererInfo, render, renderers
-from .pyramid import Level, Pyramid, memory_limit
+from .pyramid import Level, Pyramid, memory_limit, remote_stats
 from .mesh import Grid, Mesh, load_grid, load_mesh
 from .components import (Colocalisation, Compressed, Measurement, Shape, colocalisation,
                          compress, decompress, filter, filters, isosurface, measure, voxelize)
@@ -50,7 +50,7 @@ __all__ = [
     "Object", "VolumeObject", "GridObject", "Sphere", "Box", "Plane", "Cylinder", "Polygon",
     "MeshObject", "World", "load_scene",
     "Renderer", "RendererInfo", "renderers", "render", "Image", "Pyramid", "Level",
-    "memory_limit",
+    "memory_limit", "remote_stats",
     "Mesh", "load_mesh", "Grid", "load_grid",
     "filter", "filters", "isosurface", "measure", "Measurement", "colocalisation",
     "Colocalisation", "voxelize", "Shape", "compress",

@@ -36,7 +36,7 @@ from .errors import InvalidError
 from .volume import Volume
 from .world import VolumeObject, World
 
-__all__ = ["Pyramid", "Level", "memory_limit"]
+__all__ = ["Pyramid", "Level", "memory_limit", "remote_stats"]
 
 Level = collections.namedtuple("Level", "shape dtype spacing origin")
 Level.__doc__ = """One level of a :class:`Pyramid`: ``shape`` (k, j, i) voxels, numpy
@@ -74,6 +74,26 @@ def memory_limit(size=None):
     if size is not None:
         lib.vv_cache_set_limit(c, _bytes(size))
     return int(lib.vv_cache_limit(c))
+
+
+def remote_stats():
+    """What the remote transport (every HTTP, HTTPS and S3 read of the
+    stores opened by URL in this process, docs/formats.md "Remote data")
+    has pending and has done since the process started (vv_remote_stats_get),
+    as a dict of ints: ``pending`` (reads -- chunks, shard indexes, metadata
+    files -- asked for and not yet answered), ``pending_bytes`` (bytes of
+    them not yet received: a range's length, a whole object's once the
+    server says its length), ``in_flight`` (HTTP requests on the wire now),
+    ``completed`` (reads answered: received, absent or failed), ``failed``
+    (of those, failed for good), ``requests`` (HTTP requests sent, each
+    retry and redirect counted) and ``bytes_received`` (bytes of response
+    bodies, every try). Thread-safe; a snapshot whose fields are each read
+    atomically, so two of them may be a moment apart while reads go on."""
+    st = ffi.new("vv_remote_stats *")
+    lib.vv_remote_stats_get(st)
+    return {k: int(getattr(st, k)) for k in ("pending", "pending_bytes", "in_flight",
+                                             "completed", "failed", "requests",
+                                             "bytes_received")}
 
 
 class Pyramid:

@@ -229,7 +229,8 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         return vv_scene_serr(c, kp, "\"filters\" apply to time step 0 of a file");
     }
 
-    char *full = vv_path_join_dir(c->path, file);
+    /* a URL (a remote store) as it is; a path relative to the scene's folder */
+    char *full = vv_path_is_url(file) ? vv_strdup(file) : vv_path_join_dir(c->path, file);
     if (!full)
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
     vv_volume *vol = NULL;

@@ -21,9 +21,14 @@ of three objects side by side (composite and MIP; two of one store and
 one of a copy, each object owning its source) is drawn out of core in one
 frame (the cache line counts them) within the one 16 MiB budget of the
 process's cache, and its converged frame is what `volvis render SCENE
---memory-limit` draws of the saved session.
+--memory-limit` draws of the saved session. Then, in a GUI started with
+nothing open, File > Open URL… as a person uses it (the menu, the dialog's URL entry, Open) opens
+the store from a slow loopback HTTP server: while the loader waits for it
+the views show "N chunks, X MB pending" (its accessible name; its description says what it is),
+gone once every read is answered, and the converged frame is what `volvis
+render` draws of the store by path in the saved session's view.
 
-usage: pyramid_session.py GUI CLI OUTDIR [two]
+usage: pyramid_session.py GUI CLI OUTDIR [two | url]
 """
 import os
 import re
@@ -175,9 +180,11 @@ def main():
     print(f"the GUI's converged frame against volvis render of the session: {q:.1f} dB")
     check(q >= 30, f"the GUI's converged frame is not the CLI's ({q:.1f} dB)")
     # a second GUI session runs in a process of its own (pyatspi keeps the
-    # first session's bus)
+    # first session's bus), and so does a third
     r = subprocess.run([sys.executable, os.path.abspath(__file__), GUI, CLI, OUT, "two"])
     check(r.returncode == 0, f"the session of two pyramids failed ({r.returncode})")
+    r = subprocess.run([sys.executable, os.path.abspath(__file__), GUI, CLI, OUT, "url"])
+    check(r.returncode == 0, f"the session of Open URL… failed ({r.returncode})")
 
 
 def two_pyramids():
@@ -234,4 +241,102 @@ def two_pyramids():
     check(q >= 30, f"the GUI's frame of three objects is not the CLI's ({q:.1f} dB)")
 
 
-run(two_pyramids if sys.argv[4:] == ["two"] else main)
+REMOTE_WHAT = "reads of remote stores"
+PENDING = re.compile(r"^\d+ chunks?(, [0-9.]+ MB|, [0-9]+ kB)? pending$")
+
+
+def url_session():
+    """A GUI started with nothing open; File > Open URL… of the store from a slow
+    server (open_url); its converged frame is what volvis render draws of the saved
+    session with the store's path in place of the URL (no network)."""
+    import json
+    store = os.path.abspath(os.path.join(OUT, "head.ome.zarr"))
+    out = os.path.abspath(os.path.join(OUT, "url"))
+    os.makedirs(out, exist_ok=True)
+    with Session(GUI, [], out, env={"VOLVIS_MEMORY_LIMIT": "16M"}, window=(1100, 720)) as s:
+        s.app()
+        s.find("Open a file…", "push button", timeout=60)
+        shot, session = open_url(s, store, out)
+        s.quit()
+    sc = json.load(open(session))
+    check(len(sc["objects"]) == 1 and sc["objects"][0]["file"].startswith("http://127.0.0.1:"),
+          f"the saved session does not name the URL: {sc['objects']}")
+    sc["objects"][0]["file"] = store
+    local = os.path.join(out, "url_local.json")
+    json.dump(sc, open(local, "w"))
+    cli = os.path.join(out, "url_cli.png")
+    r = subprocess.run([CLI, "render", local, "--memory-limit", "16M", "-o", cli],
+                       capture_output=True, text=True)
+    check(r.returncode == 0, f"volvis render of the URL's session by path failed: {r.stderr}")
+    q = psnr(shot, cli)
+    print(f"the GUI's frame of the URL against volvis render of the store by path: {q:.1f} dB")
+    check(q >= 30, f"the GUI's frame of the URL is not the store's ({q:.1f} dB)")
+
+
+def open_url(s, store, out):
+    """File > Open URL… as a person uses it (the menu shows it and its shortcut, Ctrl+Shift+O),
+    the dialog's URL entry, Open.
+    The store is served by a slow loopback server (http_common.drip_server): while the
+    loader waits for it the views show "N chunks, X MB pending" (a label: its text is its
+    accessible name, its description says what it is), gone once every read is
+    answered; the frame then converges. Returns (the converged frame, the session saved of it)."""
+    from http_common import drip_server
+    srv, drip = drip_server(os.path.dirname(store), piece=1024, pause=0.004)
+    url = f"http://127.0.0.1:{srv.server_address[1]}/{os.path.basename(store)}"
+    try:
+        s.focus_main()
+        # the menu lists it with its shortcut; GTK 4.8 gives a popover's items
+        # no usable extents, so the shortcut the menu shows opens it
+        s.click(s.find("Menu"))
+        s.find("Open URL…", timeout=20, visible=False)
+        s.key("Escape")
+        s.focus_main()
+        s.key("ctrl+shift+o")
+        s.xdo("search", "--sync", "--name", "open URL")
+        entry = s.find("URL of the store", "text", timeout=20)
+        s.click(entry)
+        s.type(url)
+        s.wait_for(lambda: url in s.text(entry), f"{url!r} not typed in the entry")
+        n0 = s.n_full()
+        s.click(s.find("Open", "push button", timeout=20))
+        line, t0 = None, time.time()
+        while line is None and time.time() - t0 < 60:
+            line = next((o for o in s.walk(prune_hidden_pages=True)
+                         if (o.description or "").startswith(REMOTE_WHAT)), None)
+        check(line is not None, "no remote-data line (its accessible description)")
+
+        def shown():  # its text while on screen (a label's name is its text)
+            try:
+                return s.text(line) if s.extents(line)[2] > 0 else ""
+            except Exception:
+                return ""
+        seen, t0 = [], time.time()
+        while not seen and time.time() - t0 < 120:
+            t = shown()
+            if PENDING.match(t):
+                seen.append(t)
+                s.screenshot("url_pending.png")
+            time.sleep(0.05)
+        check(seen, "no \"N chunks, X MB pending\" over the views while the store loads")
+        print(f"while loading: {seen[0]!r} (served {drip.sent} bytes so far)")
+        s.wait_for(lambda: shown() == "", "the pending line stays after the reads ended",
+                   timeout=120)
+        s.wait_full(n0, "opening the URL")
+        s.page("View")
+        s.wait_for(lambda: "converged" in cache_line(s), f"never converged: {cache_line(s)!r}",
+                   timeout=120)
+        check(shown() == "", f"the pending line is shown once converged: {shown()!r}")
+        print(f"converged over HTTP: {cache_line(s)!r}; served {drip.requests} requests, "
+              f"{drip.sent} bytes")
+        time.sleep(1)
+        shot = s.full_png(copy_to="url_converged.png")
+        s.screenshot("url_window.png")
+        session = os.path.join(out, "url_session.json")
+        s.save_as(session)
+        return shot, session
+    finally:
+        srv.shutdown()
+        srv.server_close()
+
+
+run({"two": two_pyramids, "url": url_session}.get((sys.argv[4:] or [""])[0], main))

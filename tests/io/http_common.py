@@ -65,3 +65,84 @@ def setup(n=96):
     os.makedirs(www)
     v3, v2 = write_stores(www, n=n)
     return volvis, out, Checks(), www, v3, v2
+
+
+def drip_server(root, piece=1024, pause=0.003):
+    """A slow HTTP server of the files under ROOT on a free loopback port, in threads of
+    this process: byte ranges (206 with Content-Range; a suffix range too), HEAD, 404
+    without a body, and every body written PIECE bytes at a time PAUSE seconds apart. It
+    counts what it answered, as an access log would: (server, handler class) with
+    handler.requests (requests answered), handler.sent (body bytes written) and
+    handler.wait_idle(). Stop it with server.shutdown(); server.server_close()."""
+    import http.server
+    import pathlib
+    import threading
+    import time
+    base = pathlib.Path(root).resolve()
+
+    class Drip(http.server.BaseHTTPRequestHandler):
+        lock = threading.Lock()
+        requests = 0
+        sent = 0
+        active = 0  # requests being answered now
+
+        def log_message(self, *a):
+            pass
+
+        def _add(self, requests=0, sent=0, active=0):
+            with Drip.lock:
+                Drip.requests += requests
+                Drip.sent += sent
+                Drip.active += active
+
+        def _answer(self, body):
+            self._add(requests=1, active=1)
+            try:
+                self._send(body)
+            finally:
+                self._add(active=-1)
+
+        def _send(self, body):
+            path = (base / self.path.split("?")[0].lstrip("/")).resolve()
+            if base not in path.parents or not path.is_file():
+                self.send_response(404)
+                self.send_header("Content-Length", "0")
+                self.end_headers()
+                return
+            data = path.read_bytes()
+            rng = self.headers.get("Range")
+            if rng and rng.startswith("bytes="):
+                a, b = rng[6:].split("-")
+                lo, hi = ((max(0, len(data) - int(b)), len(data) - 1) if a == "" else
+                          (int(a), min(len(data) - 1, int(b)) if b else len(data) - 1))
+                self.send_response(206)
+                self.send_header("Content-Range", "bytes %d-%d/%d" % (lo, hi, len(data)))
+                data = data[lo:hi + 1]
+            else:
+                self.send_response(200)
+            self.send_header("Content-Length", str(len(data)))
+            self.end_headers()
+            for i in range(0, len(data) if body else 0, piece):
+                if i:
+                    time.sleep(pause)
+                self.wfile.write(data[i:i + piece])
+                self.wfile.flush()
+                self._add(sent=len(data[i:i + piece]))
+
+        def do_GET(self):
+            self._answer(True)
+
+        def do_HEAD(self):
+            self._answer(False)
+
+        @classmethod
+        def wait_idle(cls, timeout=30):
+            """Waits until no request is being answered (its counts final)."""
+            end = time.monotonic() + timeout
+            while cls.active and time.monotonic() < end:
+                time.sleep(0.01)
+
+    srv = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Drip)
+    srv.daemon_threads = True
+    threading.Thread(target=srv.serve_forever, daemon=True).start()
+    return srv, Drip

@@ -28,6 +28,8 @@ const api = {
   lastPng: null, // Uint8Array of the last PNG_ payload
   lastProbe: null, // the last `probe` reply to the pointer
   errors: [], // messages of the `error`s received
+  remote: null, // the last `remote` (reads of remote stores pending)
+  remoteShown: [], // the texts the status line showed for them, in order
   connected: false,
   closed: null, // {code, reason} once the socket closed
   send: (msg) => conn.send(msg),
@@ -39,6 +41,7 @@ window.volvis = api;
 const statusConn = document.getElementById('status-conn');
 const statusFrame = document.getElementById('status-frame');
 const statusMsg = document.getElementById('status-msg');
+const statusRemote = document.getElementById('status-remote');
 const viewInfo = document.getElementById('view3d-info');
 
 function showMessage(text, isError = false) {
@@ -64,6 +67,24 @@ function showFrame(h) {
     `${h.kind ?? 'frame'}${h.sharp ? ' (sharp)' : ''} · ${h.width}×${h.height} · ` +
     `render ${ms(h.render_ms)} · encode ${ms(h.encode_ms)}`;
   viewInfo.textContent = h.sharp ? '' : 'preview';
+}
+
+// Reads of remote stores (HTTP, S3) not yet answered: "12 chunks, 3.4 MB
+// pending" (kB under a megabyte) while a frame waits for the network,
+// hidden when none are.
+function showRemote(m) {
+  const n = m.pending;
+  let text = '';
+  if (n > 0) {
+    text = `${n} ${n === 1 ? 'chunk' : 'chunks'}`;
+    const b = m.pending_bytes;
+    if (b >= 1e6) text += `, ${(b / 1e6).toFixed(1)} MB`;
+    else if (b > 0) text += `, ${Math.ceil(b / 1e3)} kB`;
+    text += ' pending';
+  }
+  statusRemote.textContent = text;
+  statusRemote.hidden = n === 0;
+  api.remoteShown.push(text);
 }
 
 // ---- the parts ----
@@ -110,6 +131,11 @@ conn.on('close', ({ code, reason }) => {
 });
 
 conn.on('client-error', showError);
+
+conn.on('remote', (m) => {
+  api.remote = m;
+  showRemote(m);
+});
 
 conn.on('state', (s) => {
   api.state = s;

@@ -259,6 +259,12 @@ srv_buf *srv_session_next_out(srv_session *s, srv_client *c);
 int srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t cap);
 /** 1 when @p c has something to send. */
 int srv_session_has_out(srv_session *s, srv_client *c);
+/**
+ * Queues progress message @p text (copied) for @p c alone, unless half its
+ * queue is taken already: a client that reads slowly misses progress, and
+ * never its replies for it (service thread).
+ */
+void srv_session_send_progress(srv_session *s, srv_client *c, const char *text);
 
 /**
  * The World of file @p path through the door (vv_world_open: a scene, a

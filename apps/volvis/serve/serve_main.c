@@ -12,12 +12,15 @@
 #include <errno.h>
 #include <libwebsockets.h>
 #include <limits.h>
+#include <pthread.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/random.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "serve.h"
@@ -348,6 +351,54 @@ link_remove(srv_client *c) {
         }
 }
 
+/* ---- remote data pending (docs/serve-protocol.md, `remote`) ---------------------------------- */
+
+/* The reads of remote stores not yet answered, as every client last heard
+ * them (service thread); a watcher thread wakes the service four times a
+ * second while they change, and the service sends each client a `remote`
+ * message when they did. */
+static vv_remote_stats remote_sent;
+static atomic_int remote_stop;
+static pthread_t remote_thread;
+static int remote_started;
+
+static void *
+remote_watch(void *arg) {
+    (void)arg;
+    vv_remote_stats last = {0};
+    while (!atomic_load(&remote_stop)) {
+        struct timespec ts = {0, 250 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+        vv_remote_stats st;
+        vv_remote_stats_get(&st);
+        if (st.pending != last.pending || st.pending_bytes != last.pending_bytes) {
+            last = st;
+            srv_wake(&server);
+        }
+    }
+    return NULL;
+}
+
+/* A `remote` message to every client when the counts changed since the last (service thread). */
+static void
+remote_send(void) {
+    vv_remote_stats st;
+    vv_remote_stats_get(&st);
+    if (st.pending == remote_sent.pending && st.pending_bytes == remote_sent.pending_bytes)
+        return;
+    remote_sent = st;
+    char text[200];
+    snprintf(text, sizeof text,
+             "{\"type\":\"remote\",\"pending\":%llu,\"pending_bytes\":%llu,\"in_flight\":%llu,"
+             "\"completed\":%llu,\"bytes_received\":%llu}",
+             (unsigned long long)st.pending, (unsigned long long)st.pending_bytes,
+             (unsigned long long)st.in_flight, (unsigned long long)st.completed,
+             (unsigned long long)st.bytes_received);
+    for (client_link *l = links; l; l = l->next)
+        if (l->c->session)
+            srv_session_send_progress(l->c->session, l->c, text);
+}
+
 static int
 callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len) {
     conn *pc = user;
@@ -451,6 +502,7 @@ callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in
         }
         return 0;
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
+        remote_send();
         for (client_link *l = links; l; l = l->next)
             if (l->c->session && srv_session_has_out(l->c->session, l->c))
                 lws_callback_on_writable((struct lws *)l->c->wsi);
@@ -743,6 +795,7 @@ cli_serve_main(int argc, char **argv) {
             server.ranks > 1 ? ", every frame rendered by all MPI ranks" : "");
     if (server.verbose)
         fprintf(stderr, "volvis: serve: the page's files from %s\n", server.web_dir);
+    remote_started = pthread_create(&remote_thread, NULL, remote_watch, NULL) == 0;
     while (!interrupted) {
         if (lws_service(ctx, 0) < 0)
             break;
@@ -755,6 +808,9 @@ cli_serve_main(int argc, char **argv) {
     pthread_mutex_unlock(&server.lock);
     if (server.ranks > 1)
         srv_mpi_service(&server);
+    atomic_store(&remote_stop, 1);
+    if (remote_started)
+        pthread_join(remote_thread, NULL);
     lws_context_destroy(ctx);
     server.context = NULL;
     srv_session_free(server.shared_session);

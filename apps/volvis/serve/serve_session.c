@@ -230,6 +230,16 @@ reply_json(srv_session *s, uint64_t to, json_t *o) {
     srv_buf_unref(b);
 }
 
+void
+srv_session_send_progress(srv_session *s, srv_client *c, const char *text) {
+    srv_buf *b = srv_buf_text(text, strlen(text));
+    pthread_mutex_lock(&s->lock);
+    if (c->n_queue < SRV_QUEUE_MAX / 2)
+        queue_to(c, b);
+    pthread_mutex_unlock(&s->lock);
+    srv_buf_unref(b);
+}
+
 static void reply_error(srv_session *s, uint64_t to, const char *fmt, ...) VV_PRINTF(3, 4);
 
 static void

@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,6 +18,84 @@
 #include "core/internal.h"
 #include "io/store/bytesrc.h"
 #include "volvis/io.h"
+
+/* ---- the remote transport's counts (vv_remote_stats) ---------------------------------- */
+
+/* Process-wide, as the remote sources are (bs_remote keeps them for the
+ * process's life): each count is one atomic, so that any thread reads them
+ * without a lock while reads go on. */
+static atomic_uint_fast64_t n_pending, n_pending_bytes, n_in_flight, n_completed, n_failed,
+    n_requests, n_received;
+
+void
+bs_count_open(bs_count *c, uint64_t want) {
+    c->want = c->left = want;
+    c->sized = want > 0;
+    c->open = 1;
+    atomic_fetch_add(&n_pending, 1);
+    atomic_fetch_add(&n_pending_bytes, want);
+}
+
+void
+bs_count_try(bs_count *c) {
+    atomic_fetch_add(&n_requests, 1);
+    atomic_fetch_add(&n_in_flight, 1);
+    if (c->open && c->left < c->want) {
+        atomic_fetch_add(&n_pending_bytes, c->want - c->left);
+        c->left = c->want;
+    }
+}
+
+void
+bs_count_length(bs_count *c, uint64_t n) {
+    if (!c->open || c->sized || n == 0)
+        return;
+    c->sized = 1;
+    c->want = n;
+    c->left += n;
+    atomic_fetch_add(&n_pending_bytes, n);
+}
+
+void
+bs_count_body(bs_count *c, uint64_t n) {
+    atomic_fetch_add(&n_received, n);
+    const uint64_t d = n < c->left ? n : c->left;
+    if (c->open && d > 0) {
+        c->left -= d;
+        atomic_fetch_sub(&n_pending_bytes, d);
+    }
+}
+
+void
+bs_count_landed(void) {
+    atomic_fetch_sub(&n_in_flight, 1);
+}
+
+void
+bs_count_close(bs_count *c, int failed) {
+    if (!c->open)
+        return;
+    c->open = 0;
+    atomic_fetch_sub(&n_pending_bytes, c->left);
+    c->left = 0;
+    atomic_fetch_add(&n_completed, 1);
+    if (failed)
+        atomic_fetch_add(&n_failed, 1);
+    atomic_fetch_sub(&n_pending, 1);
+}
+
+void
+vv_remote_stats_get(vv_remote_stats *st) {
+    if (!st)
+        return;
+    st->pending = atomic_load(&n_pending);
+    st->pending_bytes = atomic_load(&n_pending_bytes);
+    st->in_flight = atomic_load(&n_in_flight);
+    st->completed = atomic_load(&n_completed);
+    st->failed = atomic_load(&n_failed);
+    st->requests = atomic_load(&n_requests);
+    st->bytes_received = atomic_load(&n_received);
+}
 
 int
 vv_path_is_url(const char *path) {

@@ -76,6 +76,34 @@ vv_bytesrc *bs_remote(const char *root);
  * remote store may wait on at once. */
 int bs_http_in_flight(void);
 
+/* ---- the remote transport's counts (vv_remote_stats, io.h; bytesrc.c) ---- */
+
+/* One read's share of the process's counts: bytes it expects of the try
+ * in flight (0 while not known) and, of them, those still counted
+ * pending. Owned by the read (one thread at a time); the counts it updates
+ * are atomic. */
+typedef struct bs_count {
+    uint64_t want, left;
+    int open, sized;
+} bs_count;
+
+/* A read accepted: pending + 1, its @p want bytes pending (0: not known
+ * until the server says). */
+void bs_count_open(bs_count *c, uint64_t want);
+/* A request for it sent: requests and in flight + 1, its bytes pending
+ * again (a retry receives them anew). */
+void bs_count_try(bs_count *c);
+/* The server said the body's length @p n (taken when the read's was not
+ * known). */
+void bs_count_length(bs_count *c, uint64_t n);
+/* @p n body bytes received. */
+void bs_count_body(bs_count *c, uint64_t n);
+/* A request ended (answered, failed or redirected): in flight - 1. */
+void bs_count_landed(void);
+/* The read answered (@p failed: for good): pending - 1, completed + 1, what
+ * it still counted pending dropped. Again: nothing. */
+void bs_count_close(bs_count *c, int failed);
+
 /* ---- S3 addressing (bytesrc_http.c; unit-tested) ---------------------- */
 
 /* Where the objects of an S3 or HTTP root URL are and how they are asked

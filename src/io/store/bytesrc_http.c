@@ -434,6 +434,7 @@ typedef struct xfer {
     /* the on-disk cache: the entry's file and ETag when one is held */
     char cache_file[4200], cache_key[8500], cache_etag[128];
     int cached;
+    bs_count cnt; /* its share of vv_remote_stats */
 } xfer;
 
 static double
@@ -611,6 +612,11 @@ on_header(char *p, size_t size, size_t n, void *u) {
 static size_t
 on_body(char *p, size_t size, size_t n, void *u) {
     xfer *x = u;
+    curl_off_t cl = -1;
+    if (!x->cnt.sized && curl_easy_getinfo(x->e, CURLINFO_CONTENT_LENGTH_DOWNLOAD_T, &cl) == 0 &&
+        cl > 0)
+        bs_count_length(&x->cnt, (uint64_t)cl);
+    bs_count_body(&x->cnt, (uint64_t)(size * n));
     return http_resp_body(&x->r, p, size * n) ? size * n : 0;
 }
 
@@ -721,6 +727,7 @@ start(bs_http *s, CURLM *m, xfer *x) {
         fail(s, x, VV_ERR_IO, "cannot start the transfer");
         return 0;
     }
+    bs_count_try(&x->cnt);
     return 1;
 }
 
@@ -933,6 +940,7 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
             left--;
         } else {
             cache_lookup(&x[i]);
+            bs_count_open(&x[i].cnt, g[i].len == BS_ALL ? 0 : g[i].len);
         }
     }
     int active = 0;
@@ -947,10 +955,12 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
                     next_retry = x[i].retry_at;
                 continue;
             }
-            if (start(s, m, &x[i]))
+            if (start(s, m, &x[i])) {
                 active++;
-            else
+            } else {
                 left--;
+                bs_count_close(&x[i].cnt, 1);
+            }
         }
         int running = 0;
         curl_multi_perform(m, &running);
@@ -963,10 +973,12 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
             curl_easy_getinfo(msg->easy_handle, CURLINFO_PRIVATE, (char **)&xx);
             const CURLcode rc = msg->data.result;
             active--;
+            bs_count_landed();
             finish(s, m, xx, rc);
-            if (xx->done)
+            if (xx->done) {
                 left--;
-            else if (xx->started) /* redirected: running again */
+                bs_count_close(&xx->cnt, xx->status != VV_OK);
+            } else if (xx->started) /* redirected: running again */
                 active++;
         }
         if (left <= 0)
@@ -989,6 +1001,7 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
         }
         curl_slist_free_all(x[i].hdrs);
         http_resp_free(&x[i].r);
+        bs_count_close(&x[i].cnt, x[i].status != VV_OK);
         if (first == VV_OK && x[i].status != VV_OK) {
             first = x[i].status;
             vv_error_set(first, "%s", x[i].msg);
