@@ -76,6 +76,13 @@ vv_bytesrc *bs_remote(const char *root);
  * remote store may wait on at once. */
 int bs_http_in_flight(void);
 
+/* The process's HTTP(S) and S3 requests so far: *requests started (each
+ * try and redirect one), *max_in_flight the most in flight at once, over
+ * every source and thread. VOLVIS_HTTP_STATS=1 prints them at exit, one
+ * line on stderr ("volvis: http: N requests, at most M in flight").
+ * Thread-safe. */
+void bs_http_stats(uint64_t *requests, int *max_in_flight);
+
 /* ---- S3 addressing (bytesrc_http.c; unit-tested) ---------------------- */
 
 /* Where the objects of an S3 or HTTP root URL are and how they are asked
