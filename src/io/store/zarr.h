@@ -176,7 +176,8 @@ typedef struct zr_dest {
  * ddims unused); @p range (may be NULL) widened. Decoded on @p nthreads
  * threads (each a buffer of J->cbytes; the caller's the first). A store
  * read over the network (a URL) has its reads batched: the shard indexes
- * first (each once), then the chunks' byte ranges, bs_http_in_flight()
+ * first (each once), then the chunks' byte ranges (those that follow
+ * each other in a shard merged into one request), bs_http_in_flight()
  * requests at once through zr_store_get_many from two fetching threads of
  * their own while the decoding threads decode what came before, in the
  * order of @p L (the caller's: a level-of-detail frame's is coarse levels

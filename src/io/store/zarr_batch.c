@@ -7,10 +7,12 @@
  * A remote read is a pipeline. The plan: each chunk's read unit (an inner
  * chunk when sharded) and where its bytes are; a sharded array's shard
  * indexes are read first (zr3_locate_many: each shard's once, a window of
- * them at a time). Then two fetching threads of our own each take the
- * next window of bs_http_in_flight() / 2 chunks in the caller's order and
- * put the whole window in flight through zr_store_get_many (one libcurl
- * multi handle; up to bs_http_in_flight() requests at once in all), while
+ * them at a time); inner chunks whose bytes follow each other in a shard
+ * are merged into runs, one range request each (runs()). Then two
+ * fetching threads of our own each take the next window of
+ * bs_http_in_flight() / 2 runs in the caller's order and put the whole
+ * window in flight through zr_store_get_many (one libcurl multi handle;
+ * up to bs_http_in_flight() requests at once in all), while
  * the decoding threads (the caller's count, threads of our own: OpenMP
  * gives one inside a renderer's parallel region) decode the windows that
  * came back. The encoded bytes held -- reserved for a window in flight
@@ -34,12 +36,20 @@
 
 #define ZB_KEY 2200
 #define ZB_FETCHERS 2
+/* A run: at most these bytes (its cap at least ZB_RUN_MIN) and chunks in
+ * one request. */
+#define ZB_RUN_MAX ((uint64_t)8 << 20)
+#define ZB_RUN_MIN ((uint64_t)256 << 10)
+#define ZB_RUN_CHUNKS 4096
 
-/* One window of chunks put in flight together, then decoded. */
+/* One window of runs put in flight together, then decoded: run r's
+ * response holds its chunks' bytes back to back. */
 typedef struct zb_win {
     struct zb_win *next;
-    int n, taken, left;
-    uint64_t *pos; /* the chunks' positions in the plan */
+    int n;            /* runs */
+    uint64_t members; /* chunks in all */
+    uint64_t taken, left;
+    uint64_t *run; /* the runs' numbers */
     bs_get *g;
     char *keys;
     uint64_t held; /* bytes received, not yet decoded */
@@ -56,7 +66,11 @@ typedef struct zb_job {
     uint64_t *idx, *off, *len;
     unsigned char *missing;
     uint64_t *fetch, nfetch; /* positions to fetch, in order */
-    uint64_t *direct;        /* positions absent (the fill value) */
+    /* runs: chunks of one object whose byte ranges follow each other, one
+     * request each: run r is fetch[rfirst[r] .. rfirst[r] + rcount[r]) of
+     * the order sorted by object and offset (order), bytes [roff, roff + rlen) */
+    uint64_t *order, *rfirst, *rcount, *roff, *rlen, nrun;
+    uint64_t *direct; /* positions absent (the fill value) */
     uint64_t ndirect;
     atomic_ullong next_direct;
     uint64_t max;      /* the most encoded bytes a read unit may take */
@@ -64,7 +78,7 @@ typedef struct zb_job {
     int window;
     pthread_mutex_t mu;
     pthread_cond_t cv;
-    uint64_t next_fetch, held, limit;
+    uint64_t next_fetch, held, limit; /* next_fetch: the next run */
     zb_win *head, *tail;
     int fetchers_live, abort;
     long long first; /* the first failing position */
@@ -78,7 +92,7 @@ fail_locked(zb_job *j, uint64_t pos, vv_status s, const char *msg) {
     if (j->first < 0 || (long long)pos < j->first) {
         j->first = (long long)pos;
         j->first_status = s;
-        snprintf(j->first_msg, sizeof j->first_msg, "%s", msg);
+        snprintf(j->first_msg, sizeof j->first_msg, "%.1000s", msg);
     }
     j->abort = 1;
     pthread_cond_broadcast(&j->cv);
@@ -90,16 +104,16 @@ win_free(zb_win *w) {
         return;
     for (int i = 0; w->g && i < w->n; i++)
         free(w->g[i].out);
-    free(w->pos);
+    free(w->run);
     free(w->g);
     free(w->keys);
     free(w);
 }
 
-/* The bytes reserved for position @p p in flight. */
+/* The bytes reserved for run @p r in flight. */
 static uint64_t
-reserve(const zb_job *j, uint64_t p) {
-    return j->len[p] != ZR_ALL ? j->len[p] : j->estimate;
+reserve(const zb_job *j, uint64_t r) {
+    return j->rlen[r] != ZR_ALL ? j->rlen[r] : j->estimate;
 }
 
 /* A fetching thread: windows of the plan in order, each put in flight
@@ -109,11 +123,11 @@ fetcher(void *u) {
     zb_job *j = u;
     const zr_array *a = j->J->a;
     pthread_mutex_lock(&j->mu);
-    while (!j->abort && j->next_fetch < j->nfetch) {
+    while (!j->abort && j->next_fetch < j->nrun) {
         /* the window: up to j->window chunks within the limit (one at least) */
         uint64_t w = 0, need = 0;
-        while (j->next_fetch + w < j->nfetch && w < (uint64_t)j->window) {
-            const uint64_t r = reserve(j, j->fetch[j->next_fetch + w]);
+        while (j->next_fetch + w < j->nrun && w < (uint64_t)j->window) {
+            const uint64_t r = reserve(j, j->next_fetch + w);
             if (w > 0 && need + r > j->limit)
                 break;
             need += r;
@@ -131,36 +145,41 @@ fetcher(void *u) {
         vv_status s = VV_OK;
         if (win) {
             win->n = (int)w;
-            win->pos = malloc(w * sizeof *win->pos);
+            win->run = malloc(w * sizeof *win->run);
             win->g = calloc(w, sizeof *win->g);
             win->keys = malloc(w * ZB_KEY);
         }
-        if (!win || !win->pos || !win->g || !win->keys)
+        if (!win || !win->run || !win->g || !win->keys)
             s = vv_error_set(VV_ERR_NOMEM, "out of memory for %llu chunk reads",
                              (unsigned long long)w);
         for (uint64_t i = 0; s == VV_OK && i < w; i++) {
-            const uint64_t p = j->fetch[at + i];
+            const uint64_t r = at + i, p = j->fetch[j->order[j->rfirst[r]]];
             uint64_t top[ZR_MAX_DIM];
             const uint64_t *x = j->idx + p * ZR_MAX_DIM;
             for (int d = 0; d < a->ndim; d++) /* the shard's position when sharded */
                 top[d] = a->nshard ? x[d] * a->chunks[d] / a->cshape[0][d] : x[d];
             char *key = win->keys + i * ZB_KEY;
             zr_chunk_key(a, top, key, ZB_KEY);
-            win->pos[i] = p;
-            win->g[i] = (bs_get){.key = key, .off = j->off[p], .len = j->len[p], .max = j->max};
+            win->run[i] = r;
+            win->members += j->rcount[r];
+            /* one chunk: at most what its codecs make of it; a run: its exact bytes */
+            win->g[i] = (bs_get){.key = key,
+                                 .off = j->roff[r],
+                                 .len = j->rlen[r],
+                                 .max = j->rcount[r] > 1 ? j->rlen[r] : j->max};
         }
         if (s == VV_OK)
             s = zr_store_get_many(a, win->g, (int)w);
         pthread_mutex_lock(&j->mu);
         j->held -= need;
         if (s != VV_OK) {
-            fail_locked(j, j->fetch[at], s, vv_error_message());
+            fail_locked(j, j->fetch[j->order[j->rfirst[at]]], s, vv_error_message());
             pthread_mutex_unlock(&j->mu);
             win_free(win);
             pthread_mutex_lock(&j->mu);
             continue;
         }
-        win->left = win->n;
+        win->left = win->members;
         for (int i = 0; i < win->n; i++)
             win->held += win->g[i].n;
         j->held += win->held;
@@ -177,10 +196,12 @@ fetcher(void *u) {
     return NULL;
 }
 
-/* Position @p p's chunk decoded from @p src (NULL: absent) with scratch
- * @p buf and copied into the volume; a failure kept. */
+/* Position @p p's chunk (of read @p g; NULL: absent) decoded from its
+ * @p m bytes at @p src with scratch @p buf and copied into place; a
+ * failure kept. */
 static void
-decode_one(zb_job *j, uint64_t p, const bs_get *g, unsigned char *buf, double *range) {
+decode_one(zb_job *j, uint64_t p, const bs_get *g, const unsigned char *src, size_t m,
+           unsigned char *buf, double *range) {
     const zr_layout *J = j->J;
     const uint64_t *x = j->idx + p * ZR_MAX_DIM;
     vv_status s = VV_OK;
@@ -194,12 +215,12 @@ decode_one(zb_job *j, uint64_t p, const bs_get *g, unsigned char *buf, double *r
                      (unsigned long long)j->off[p], (unsigned long long)(j->off[p] + j->len[p]));
         else
             snprintf(what, sizeof what, "%s", g->key);
-        s = vv_zr_decode_unit(J->a, g->out, g->n, buf, J->cbytes, what);
+        s = vv_zr_decode_unit(J->a, src, m, buf, J->cbytes, what);
     }
     zr_dest *d = j->each ? &j->each[p] : NULL;
     if (s == VV_OK && d) {
         d->missing = missing;
-        d->file_bytes = missing ? 0 : g->n;
+        d->file_bytes = missing ? 0 : m;
         vv_zr_place_unit(J, x, buf, missing, d->dst, d->org, d->dims, range);
     } else if (s == VV_OK)
         vv_zr_place_unit(J, x, buf, missing, j->dst, j->dorg, j->ddims, range);
@@ -218,11 +239,11 @@ decoder(void *u) {
     double range[2] = {INFINITY, -INFINITY};
     unsigned char *buf = malloc(j->J->cbytes);
     for (uint64_t k; (k = atomic_fetch_add(&j->next_direct, 1)) < j->ndirect;)
-        decode_one(j, j->direct[k], NULL, buf, range);
+        decode_one(j, j->direct[k], NULL, NULL, 0, buf, range);
     pthread_mutex_lock(&j->mu);
     for (;;) {
         zb_win *w = j->head;
-        while (w && w->taken == w->n)
+        while (w && w->taken == w->members)
             w = w->next;
         if (!w) {
             if (j->fetchers_live == 0)
@@ -230,16 +251,31 @@ decoder(void *u) {
             pthread_cond_wait(&j->cv, &j->mu);
             continue;
         }
-        const int i = w->taken++;
+        /* member k of the window: its run, its place in the run */
+        uint64_t k = w->taken++;
+        int i = 0;
+        while (k >= j->rcount[w->run[i]])
+            k -= j->rcount[w->run[i++]];
         const int skip = j->abort;
         pthread_mutex_unlock(&j->mu);
-        if (!skip)
-            decode_one(j, w->pos[i], &w->g[i], buf, range);
-        free(w->g[i].out);
-        w->g[i].out = NULL;
+        const uint64_t r = w->run[i], p = j->fetch[j->order[j->rfirst[r] + k]];
+        const bs_get *g = &w->g[i];
+        if (!skip && g->missing) /* the object went since its index was read */
+            decode_one(j, p, NULL, NULL, 0, buf, range);
+        else if (!skip && j->rcount[r] == 1)
+            decode_one(j, p, g, g->out, g->n, buf, range);
+        else if (!skip && j->off[p] - j->roff[r] + j->len[p] <= g->n)
+            decode_one(j, p, g, g->out + (j->off[p] - j->roff[r]), (size_t)j->len[p], buf, range);
+        else if (!skip) {
+            pthread_mutex_lock(&j->mu);
+            char msg[ZB_KEY + 64];
+            snprintf(msg, sizeof msg, "%s: %zu bytes, not the range asked", g->key, g->n);
+            fail_locked(j, p, VV_ERR_FORMAT, msg);
+            pthread_mutex_unlock(&j->mu);
+        }
         pthread_mutex_lock(&j->mu);
-        j->held -= w->g[i].n;
         if (--w->left == 0) { /* every chunk of it decoded: gone */
+            j->held -= w->held;
             zb_win **pp = &j->head, *prev = NULL;
             while (*pp != w) {
                 prev = *pp;
@@ -306,8 +342,105 @@ copy_each(const zr_layout *J, const uint64_t *L, uint64_t n, unsigned char *dst,
     return VV_OK;
 }
 
+/* A chunk to fetch by its object and offset; a run by the first chunk
+ * asked of it. */
+typedef struct zb_key {
+    uint64_t obj, off, i;
+} zb_key;
+
+static int
+cmp_key(const void *x, const void *y) {
+    const zb_key *a = x, *b = y;
+    if (a->obj != b->obj)
+        return a->obj < b->obj ? -1 : 1;
+    if (a->off != b->off)
+        return a->off < b->off ? -1 : 1;
+    return a->i < b->i ? -1 : a->i > b->i;
+}
+
+typedef struct zb_run {
+    uint64_t first, count, off, len, min;
+} zb_run;
+
+static int
+cmp_run(const void *x, const void *y) {
+    const zb_run *a = x, *b = y;
+    return a->min < b->min ? -1 : a->min > b->min;
+}
+
+/* The runs of @p j's chunks to fetch: a sharded array's inner chunks whose
+ * bytes follow each other in one shard merged (at most a quarter of
+ * the read over the requests in flight, within ZB_RUN_MIN .. ZB_RUN_MAX
+ * bytes, and ZB_RUN_CHUNKS chunks: one request where zarr-python writes a
+ * shard's chunks back to back; never a byte more than the chunks'), the
+ * runs ordered by the first chunk asked of each (the caller's order kept);
+ * every other chunk a run of its own. */
+static vv_status
+runs(zb_job *j) {
+    const zr_array *a = j->J->a;
+    const uint64_t n = j->nfetch;
+    j->order = malloc((n ? n : 1) * sizeof *j->order);
+    j->rfirst = malloc((n ? n : 1) * sizeof *j->rfirst);
+    j->rcount = malloc((n ? n : 1) * sizeof *j->rcount);
+    j->roff = malloc((n ? n : 1) * sizeof *j->roff);
+    j->rlen = malloc((n ? n : 1) * sizeof *j->rlen);
+    zb_key *k = malloc((n ? n : 1) * sizeof *k);
+    zb_run *r = malloc((n ? n : 1) * sizeof *r);
+    vv_status s = j->order && j->rfirst && j->rcount && j->roff && j->rlen && k && r
+                      ? VV_OK
+                      : vv_error_set(VV_ERR_NOMEM, "out of memory for %llu chunk reads",
+                                     (unsigned long long)n);
+    for (uint64_t i = 0; s == VV_OK && i < n; i++) {
+        const uint64_t p = j->fetch[i], *x = j->idx + p * ZR_MAX_DIM;
+        uint64_t obj = 0;
+        for (int d = 0; a->nshard == 1 && d < a->ndim; d++) {
+            const uint64_t grid = (a->shape[d] + a->cshape[0][d] - 1) / a->cshape[0][d];
+            obj = obj * grid + x[d] * a->chunks[d] / a->cshape[0][d];
+        }
+        k[i] = (zb_key){a->nshard == 1 ? obj : i, j->off[p], i};
+    }
+    if (s == VV_OK && a->nshard == 1)
+        qsort(k, (size_t)n, sizeof *k, cmp_key);
+    /* a run's bytes: at most ZB_RUN_MAX, and small enough that the read is
+     * four requests in flight deep (a few large runs would leave the
+     * connections idle and the decoders waiting), at least ZB_RUN_MIN */
+    uint64_t total = 0;
+    for (uint64_t i = 0; s == VV_OK && a->nshard == 1 && i < n; i++)
+        total += j->len[j->fetch[i]];
+    uint64_t cap = total / (4 * (uint64_t)bs_http_in_flight());
+    cap = cap < ZB_RUN_MIN ? ZB_RUN_MIN : cap > ZB_RUN_MAX ? ZB_RUN_MAX : cap;
+    uint64_t nr = 0;
+    for (uint64_t i = 0; s == VV_OK && i < n; i++) {
+        const uint64_t p = j->fetch[k[i].i];
+        j->order[i] = k[i].i;
+        zb_run *last = nr ? &r[nr - 1] : NULL;
+        const uint64_t lp = last ? j->fetch[k[i - 1].i] : 0;
+        if (last && a->nshard == 1 && k[i].obj == k[i - 1].obj && j->len[p] != ZR_ALL &&
+            j->off[p] == j->off[lp] + j->len[lp] && last->len + j->len[p] <= cap &&
+            last->count < ZB_RUN_CHUNKS) {
+            last->count++;
+            last->len += j->len[p];
+            last->min = k[i].i < last->min ? k[i].i : last->min;
+        } else {
+            r[nr++] = (zb_run){i, 1, j->off[p], j->len[p], k[i].i};
+        }
+    }
+    if (s == VV_OK)
+        qsort(r, (size_t)nr, sizeof *r, cmp_run);
+    for (uint64_t i = 0; s == VV_OK && i < nr; i++) {
+        j->rfirst[i] = r[i].first;
+        j->rcount[i] = r[i].count;
+        j->roff[i] = r[i].off;
+        j->rlen[i] = r[i].len;
+    }
+    j->nrun = s == VV_OK ? nr : 0;
+    free(k);
+    free(r);
+    return s;
+}
+
 /* The remote read's plan into @p j: each chunk's read unit and range, the
- * shard indexes read first. */
+ * shard indexes read first, the runs. */
 static vv_status
 plan(zb_job *j, uint64_t n) {
     const zr_array *a = j->J->a;
@@ -337,7 +470,7 @@ plan(zb_job *j, uint64_t n) {
         else
             j->fetch[j->nfetch++] = i;
     }
-    return VV_OK;
+    return runs(j);
 }
 
 vv_status
@@ -413,6 +546,11 @@ vv_zr_copy_chunks(const zr_layout *J, const uint64_t *L, uint64_t n, unsigned ch
     free(j.missing);
     free(j.fetch);
     free(j.direct);
+    free(j.order);
+    free(j.rfirst);
+    free(j.rcount);
+    free(j.roff);
+    free(j.rlen);
     pthread_cond_destroy(&j.cv);
     pthread_mutex_destroy(&j.mu);
     return s;
