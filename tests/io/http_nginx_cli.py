@@ -15,6 +15,8 @@ with a test CA made here with openssl. Checked:
   mpirun is there) and `volvis slice URL` are the local PNGs byte for byte; `volvis convert URL --level 2 out.nrrd` the local one's voxels;
 - nginx's access log: the shards are read by range (206 with a Range header), and
   reading level 2 fetches no shard of levels 0 and 1;
+- level 0 (216 chunks) by URL with at least 16 requests in flight at once
+  (VOLVIS_HTTP_STATS=1's count), the same voxels as the local read, v3 and v2;
 - `--cache-dir`: a second read is answered 304 (If-None-Match) and read from the cache,
   the same voxels; VOLVIS_HTTP_CACHE_MAX bounds it;
 - HTTPS without the test CA: one line naming the URL (the certificate refused);
@@ -181,6 +183,23 @@ try:
     finer = [m.group(0) for m in reads if m.group(2) in ("0", "1")]
     check(not finer and any(m.group(2) == "2" for m in reads),
           f"reading level 2 fetches no shard of levels 0 and 1 ({finer[:3]})")
+    # a level of many chunks read in batches: level 0 (96^3, 216 chunks of 16^3; v3 in
+    # 27 shards, v2 one object each) with at least 16 requests in flight at once (the
+    # transport's count, VOLVIS_HTTP_STATS=1), the local read's voxels bit for bit
+    for name, local in (("v3", v3), ("v2", v2)):
+        o1, o2 = (os.path.join(OUT, f"l0_{name}_{w}.nrrd") for w in ("local", "url"))
+        p1 = volvis("convert", local, o1, "--level", "0", "--quiet", "--no-compress")
+        p2 = volvis("convert", f"{http}/{os.path.basename(local)}", o2, "--level", "0",
+                    "--quiet", "--no-compress", e=dict(env, VOLVIS_HTTP_STATS="1"))
+        m = re.search(r"(\d+) requests, at most (\d+) in flight", p2.stderr)
+        most = int(m.group(2)) if m else 0
+        ok = p1.returncode == 0 and p2.returncode == 0 and most >= 16
+        if ok:
+            x1, s1, g1 = read_nrrd(o1)
+            x2, s2, g2 = read_nrrd(o2)
+            ok = np.array_equal(x1, x2) and s1 == s2 and g1 == g2
+        check(ok, f"level 0 of {name} by URL: at least 16 requests in flight ({most}) and "
+              f"the local voxels ({p2.stderr.strip()})")
     # --cache-dir: a second read sends If-None-Match and takes the bytes from the
     # cache on 304; a small bound is kept
     cache = os.path.join(OUT, "cache")

@@ -14,7 +14,8 @@
  *   x-amz-date, x-amz-content-sha256 and the session token, never the
  *   secret; an anonymous one no Authorization.
  * - A batch of six reads on one multi handle (one absent): each its own
- *   bytes, the absent one missing.
+ *   bytes, the absent one missing; bs_http_stats counts the six requests
+ *   and at least six in flight at once.
  * - Responses: 206 with the range asked, a wrong Content-Range, 200 with the
  *   whole object to a range (sliced), a suffix, a truncated body, a
  *   Content-Length over the budget, Content-Encoding refused, 404 missing,
@@ -331,7 +332,14 @@ test_batch(void **state) {
     const char *keys[6] = {"a/0", "b/1", "absent", "c/2/3", "d", "e/zarr.json"};
     for (int i = 0; i < 6; i++)
         g[i] = (bs_get){.key = keys[i], .off = 0, .len = BS_ALL, .max = 100};
+    uint64_t req0, req1;
+    int most;
+    bs_http_stats(&req0, &most);
     assert_int_equal(src->ops->get_many(src, g, 6), VV_OK);
+    /* all six were handed to libcurl together: six in flight at once */
+    bs_http_stats(&req1, &most);
+    assert_true(req1 - req0 >= 6);
+    assert_true(most >= 6);
     for (int i = 0; i < 6; i++) {
         char want[64];
         snprintf(want, sizeof want, "/st/%s", keys[i]);

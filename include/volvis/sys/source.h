@@ -222,6 +222,18 @@ typedef struct vv_store {
      * opens, so that empty space is skipped before its chunks are read.
      */
     int (*chunk_range)(void *ctx, int level, const int c[3], double *lo, double *hi);
+    /**
+     * Optional (NULL): @p n chunks of @p level at once, chunk i (indices
+     * c[3i .. 3i + 2]) into dst[i] (box org[3i ..], dims[3i ..]) with
+     * missing[i] and file_bytes[i] as read_chunk gives them, decoded on
+     * @p nthreads threads (the caller's among them) while the store fetches
+     * the next ones; asked in the order given (the pyramid's: a frame's
+     * plan, coarse levels first, then front to back). A remote store puts
+     * its requests in flight together. The first failing chunk's error.
+     */
+    vv_status (*read_many)(void *ctx, int level, int n, const int *c, unsigned char *const *dst,
+                           const int *org, const int *dims, int nthreads, int *missing,
+                           uint64_t *file_bytes);
 } vv_store;
 
 /**

@@ -104,6 +104,13 @@ void bs_count_landed(void);
  * it still counted pending dropped. Again: nothing. */
 void bs_count_close(bs_count *c, int failed);
 
+/* The process's HTTP(S) and S3 requests so far: *requests started (each
+ * try and redirect one), *max_in_flight the most in flight at once, over
+ * every source and thread. VOLVIS_HTTP_STATS=1 prints them at exit, one
+ * line on stderr ("volvis: http: N requests, at most M in flight").
+ * Thread-safe. */
+void bs_http_stats(uint64_t *requests, int *max_in_flight);
+
 /* ---- S3 addressing (bytesrc_http.c; unit-tested) ---------------------- */
 
 /* Where the objects of an S3 or HTTP root URL are and how they are asked

@@ -61,6 +61,38 @@ static int cache_scanned;
 static uint64_t cache_total; /* bytes of its entries: scanned once, then counted */
 static pthread_once_t cfg_once = PTHREAD_ONCE_INIT;
 
+/* The process's requests: started in all, in flight now and at most
+ * (bs_http_stats; VOLVIS_HTTP_STATS=1 prints them at exit). */
+static atomic_ullong stat_requests;
+static atomic_int stat_now, stat_max;
+
+static void
+stats_print(void) {
+    uint64_t req;
+    int most;
+    bs_http_stats(&req, &most);
+    fprintf(stderr, "volvis: http: %llu requests, at most %d in flight\n", (unsigned long long)req,
+            most);
+}
+
+void
+bs_http_stats(uint64_t *requests, int *max_in_flight) {
+    *requests = atomic_load(&stat_requests);
+    *max_in_flight = atomic_load(&stat_max);
+}
+
+/* One more request in flight (@p d 1) or one fewer (-1). */
+static void
+stats_flight(int d) {
+    const int now = atomic_fetch_add(&stat_now, d) + d;
+    if (d > 0) {
+        atomic_fetch_add(&stat_requests, 1);
+        for (int m = atomic_load(&stat_max); now > m;)
+            if (atomic_compare_exchange_weak(&stat_max, &m, now))
+                break;
+    }
+}
+
 /* The integer of environment variable @p name in [lo, hi], else @p def. */
 static long
 env_long(const char *name, long def, long lo, long hi) {
@@ -94,6 +126,9 @@ cfg_init(void) {
     uint64_t mx = 0;
     const char *m = getenv("VOLVIS_HTTP_CACHE_MAX");
     cfg.cache_max = m && vv_memory_size_parse(m, &mx) == VV_OK && mx > 0 ? mx : (1ull << 30);
+    const char *st = getenv("VOLVIS_HTTP_STATS");
+    if (st && !strcmp(st, "1"))
+        atexit(stats_print);
 }
 
 int
@@ -728,6 +763,7 @@ start(bs_http *s, CURLM *m, xfer *x) {
         return 0;
     }
     bs_count_try(&x->cnt);
+    stats_flight(1);
     return 1;
 }
 
@@ -801,6 +837,7 @@ transient(CURLcode rc) {
 static void
 finish(bs_http *s, CURLM *m, xfer *x, CURLcode rc) {
     curl_multi_remove_handle(m, x->e);
+    stats_flight(-1);
     long code = 0;
     curl_easy_getinfo(x->e, CURLINFO_RESPONSE_CODE, &code);
     char what[800];

@@ -171,6 +171,50 @@ dc_worker(void *u) {
     return NULL;
 }
 
+vv_status
+py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file_bytes,
+             int *missing) {
+    const vv_store *st = &p->store;
+    if (n < 1)
+        return VV_OK;
+    int *c = calloc(9 * (size_t)n, sizeof(int));
+    unsigned char **dst = calloc((size_t)n, sizeof *dst);
+    if (!c || !dst) {
+        free(c);
+        free(dst);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for %d chunks", n);
+    }
+    int *org = c + 3 * n, *dims = c + 6 * n;
+    const py_level *l = &p->lv[todo[0]->level];
+    for (int i = 0; i < n; i++) {
+        for (int k = 0; k < 3; k++) {
+            c[3 * i + k] = todo[i]->org[k] / l->cdims[k];
+            org[3 * i + k] = todo[i]->org[k];
+            dims[3 * i + k] = todo[i]->blk->dims[k];
+        }
+        dst[i] = todo[i]->blk->data;
+    }
+    const vv_status s =
+        st->read_many(st->ctx, todo[0]->level, n, c, dst, org, dims, nthreads, missing, file_bytes);
+    for (int i = 0; s == VV_OK && i < n; i++)
+        vv_volume_update_range(todo[i]->blk);
+    free(c);
+    free(dst);
+    return s;
+}
+
+/* The chunks of @p todo (n >= 2, one level) through the store's read_many,
+ * decoded on every core. */
+static vv_status
+read_many(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
+    int nthreads = vv_threads_get();
+    /* each decoding thread holds a chunk's scratch: at most a quarter of the budget */
+    const uint64_t quarter = vv_memory_budget_get() / 4, per = p->store.scratch;
+    if (per && (uint64_t)nthreads * per > quarter)
+        nthreads = quarter / per > 1 ? (int)(quarter / per) : 1;
+    return py_read_many(p, todo, n, nthreads < 1 ? 1 : nthreads, file_bytes, missing);
+}
+
 /* Fetches the chunks in @p todo (n >= 1 of them, their blocks allocated)
  * from the store, on every core when it allows, file bytes and missing
  * flags per chunk into @p file_bytes and @p missing; the first failing
@@ -190,6 +234,15 @@ decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *
     atomic_init(&j.next, 0);
     pthread_mutex_init(&j.lock, NULL);
     const int big = st->scratch > ((size_t)64 << 20);
+    int one_level = 1;
+    for (int i = 1; i < n; i++)
+        one_level &= todo[i]->level == todo[0]->level;
+    if (st->read_many && n > 1 && one_level) {
+        /* the store fetches them together (a remote one: many requests in
+         * flight) while the cores decode */
+        pthread_mutex_destroy(&j.lock);
+        return read_many(p, todo, n, file_bytes, missing);
+    }
     if (st->parallel > 1 && !big && n > 1) {
         int want = st->parallel < n ? st->parallel : n;
         /* each thread holds a chunk's scratch: at most a quarter of the budget */

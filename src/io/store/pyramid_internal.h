@@ -156,6 +156,13 @@ py_chunk_span(const py_level *l, const int lo[3], const int hi[3], int c0[3], in
 
 /* ---- pyramid.c ------------------------------------------------------------------ */
 
+/* The chunks @p todo[0 .. n) (n >= 1, one level, their blocks allocated,
+ * the pyramid's lock not held) through the store's read_many, in that
+ * order, decoded on @p nthreads threads (the caller's among them): file
+ * bytes and missing flags per chunk, each block's range updated; the first
+ * failing chunk's error. */
+vv_status py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file_bytes,
+                       int *missing);
 /* Chunk entry @p c (position @p cc) read from the store into its block; any
  * thread, the lock not held. */
 vv_status py_read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratch,

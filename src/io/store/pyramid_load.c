@@ -120,12 +120,100 @@ plan_box_read(vv_pyramid *p, vv_status s) {
  * reading it twice), decodes it without the lock and makes it ready; stops
  * taking when the cache is full of chunks the request wants (the rest
  * stay missing: a frame draws them coarser). */
+/* Batched loading (a store with read_many: a remote one): the loaders each
+ * take a window of up to this many queued chunks of one level, in the
+ * queue's order, and have the store fetch them together. */
+static int
+load_window(const vv_pyramid *p) {
+    const int w = p->store.parallel / (p->n_loaders > 0 ? p->n_loaders : 1);
+    return w < 1 ? 1 : w > 256 ? 256 : w;
+}
+
+/* Entry @p e read (status @p s) by a loader: ready, or failed (lock held). */
+static void
+loaded(vv_pyramid *p, py_chunk *e, vv_status s, uint64_t fbytes, int missing) {
+    if (s == VV_OK) {
+        py_entry_ready(p, e, fbytes, missing);
+        p->st.loaded++;
+    } else {
+        e->state = PY_FAILED;
+        vv_volume_free(e->blk);
+        e->blk = NULL;
+        p->st.load_errors++;
+        p->arrivals++;
+    }
+    py_unpin(p, e);
+}
+
+/* A loader's window of the queue (read_many; lock held): up to
+ * load_window chunks of the first one's level reserved in the cache
+ * (PY_LOADING) into @p e, read together without the lock, made ready.
+ * Stops the queue as loader_main does when the cache is full. */
+static void
+load_batch(vv_pyramid *p, py_chunk **e, uint64_t *fbytes, int *missing) {
+    const int w = load_window(p);
+    int n = 0, level = -1;
+    while (n < w && p->q_pos < p->q_n) {
+        const py_req q = p->queue[p->q_pos];
+        if (level >= 0 && q.level != level)
+            break;
+        p->q_pos++;
+        const py_level *l = &p->lv[q.level];
+        if (py_find_chunk(p, q.level, q.L))
+            continue; /* held, or being read */
+        int c[3];
+        c[0] = (int)(q.L % (uint64_t)l->nchunks[0]);
+        c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
+        c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
+        py_chunk *x = py_new_entry(p, q.level, c);
+        if (!x || !vv_cache_make_room(p->cache, x->bytes, 1) ||
+            vv_volume_new(&x->blk, x->n, l->type) != VV_OK) {
+            if (x)
+                vv_volume_free(x->blk);
+            free(x);
+            vv_error_clear();
+            p->st.load_stopped += (uint64_t)(p->q_n - p->q_pos + 1);
+            p->q_pos = p->q_n; /* full: the rest waits for the next request */
+            p->stalled = 1;
+            pthread_cond_broadcast(&p->arrived);
+            break;
+        }
+        x->state = PY_LOADING;
+        x->ce.want = p->cl.want;
+        py_insert_entry(p, x);
+        level = q.level;
+        e[n++] = x;
+    }
+    if (n == 0)
+        return;
+    p->in_flight += n;
+    pthread_mutex_unlock(p->lock);
+    /* decoded on this thread: the other loaders' windows are in flight meanwhile */
+    const vv_status s = py_read_many(p, e, n, 1, fbytes, missing);
+    pthread_mutex_lock(p->lock);
+    p->in_flight -= n;
+    if (s != VV_OK)
+        vv_error_clear(); /* a frame reading them reports the error */
+    for (int i = 0; i < n; i++)
+        loaded(p, e[i], s, s == VV_OK ? fbytes[i] : 0, s == VV_OK ? missing[i] : 0);
+    pthread_cond_broadcast(&p->arrived);
+}
+
 static void *
 loader_main(void *arg) {
     vv_pyramid *p = arg;
     unsigned char *scratch = p->store.scratch ? malloc(p->store.scratch) : NULL;
+    const int batched = p->store.read_many != NULL;
+    const int w = batched ? 256 : 0;
+    py_chunk **win = batched ? malloc(sizeof *win * (size_t)w) : NULL;
+    uint64_t *wbytes = batched ? malloc(sizeof *wbytes * (size_t)w) : NULL;
+    int *wmiss = batched ? malloc(sizeof *wmiss * (size_t)w) : NULL;
     pthread_mutex_lock(p->lock);
     while (!p->quit) {
+        if (batched && win && wbytes && wmiss && p->q_pos < p->q_n) {
+            load_batch(p, win, wbytes, wmiss);
+            continue;
+        }
         if (p->q_pos >= p->q_n || (p->store.scratch && !scratch)) {
             pthread_cond_wait(&p->work, p->lock);
             continue;
@@ -161,22 +249,16 @@ loader_main(void *arg) {
         const vv_status s = py_read_chunk(p, e, c, scratch, &missing, &fbytes);
         pthread_mutex_lock(p->lock);
         p->in_flight--;
-        if (s == VV_OK) {
-            py_entry_ready(p, e, fbytes, missing);
-            p->st.loaded++;
-        } else {
+        if (s != VV_OK)
             vv_error_clear(); /* a frame reading it reports the error */
-            e->state = PY_FAILED;
-            vv_volume_free(e->blk);
-            e->blk = NULL;
-            p->st.load_errors++;
-            p->arrivals++;
-        }
-        py_unpin(p, e);
+        loaded(p, e, s, fbytes, missing);
         pthread_cond_broadcast(&p->arrived);
     }
     pthread_mutex_unlock(p->lock);
     free(scratch);
+    free(win);
+    free(wbytes);
+    free(wmiss);
     return NULL;
 }
 
@@ -187,6 +269,10 @@ loader_main(void *arg) {
 static vv_status
 start_loaders(vv_pyramid *p) {
     int n = p->store.parallel > 1 ? p->store.parallel : p->store.parallel ? vv_threads_get() : 1;
+    /* a store that fetches batches: two loaders, each a window of half the
+     * requests in flight, one decoding while the other's are fetched */
+    if (p->store.read_many && n > 2)
+        n = 2;
     n = n < 1 ? 1 : n > PY_LOADERS_MAX ? PY_LOADERS_MAX : n;
     if (p->store.parallel <= 1 && n > 4)
         n = 4;

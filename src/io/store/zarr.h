@@ -140,6 +140,65 @@ vv_status vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, u
 vv_status vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned char *out,
                            size_t n, int *missing, uint64_t *file_bytes);
 
+/* Decodes the read unit's stored bytes @p src (@p m bytes; an inner chunk
+ * of a sharded array) into exactly @p n bytes at @p out: the v2
+ * compressor, or the v3 codecs after the array-to-bytes one (transposes
+ * undone). @p what names the chunk in errors. Reentrant. */
+vv_status vv_zr_decode_unit(const zr_array *a, const unsigned char *src, size_t m,
+                            unsigned char *out, size_t n, const char *what);
+
+/* The read unit's grid position (all array axes) of spatial chunk @p L
+ * at the layout's channel and step. */
+void vv_zr_unit_index(const zr_layout *J, uint64_t L, uint64_t idx[ZR_MAX_DIM]);
+
+/* The decoded read unit at @p idx in @p buf (J->cbytes; @p missing: its
+ * contents are overwritten with the fill value) made the host's values in
+ * place and its voxels inside the array copied into @p dst as
+ * vv_zr_copy_chunk does (dorg, ddims, range alike). */
+void vv_zr_place_unit(const zr_layout *J, const uint64_t idx[ZR_MAX_DIM], unsigned char *buf,
+                      int missing, unsigned char *dst, const int dorg[3], const int ddims[3],
+                      double *range);
+
+/* Where one chunk of vv_zr_copy_chunks goes (its voxels inside the
+ * array into dst, an array of dims voxels, i fastest, whose voxel 0 is the
+ * level's voxel org) and what it was: missing (absent: the fill value),
+ * file_bytes (the bytes of its read unit fetched). */
+typedef struct zr_dest {
+    unsigned char *dst;
+    int org[3], dims[3];
+    int missing;
+    uint64_t file_bytes;
+} zr_dest;
+
+/* The spatial chunks @p L[0 .. n) (NULL: 0 .. n - 1, in that order) of
+ * @p J's array copied as vv_zr_copy_chunk does: all into @p dst (dorg,
+ * ddims alike), or, @p each not NULL, chunk i into each[i] (dst, dorg,
+ * ddims unused); @p range (may be NULL) widened. Decoded on @p nthreads
+ * threads (each a buffer of J->cbytes; the caller's the first). A store
+ * read over the network (a URL) has its reads batched: the shard indexes
+ * first (each once), then the chunks' byte ranges (those that follow
+ * each other in a shard merged into one request), bs_http_in_flight()
+ * requests at once through zr_store_get_many from two fetching threads of
+ * their own while the decoding threads decode what came before, in the
+ * order of @p L (the caller's: a level-of-detail frame's is coarse levels
+ * first, then front to back), the encoded bytes held (in flight and
+ * waiting) at most a quarter of the memory budget. A local store is read
+ * chunk by chunk on the threads (pread). Errors: the first failing
+ * chunk's (in the order of @p L, per batch), as vv_zr_copy_chunk. */
+vv_status vv_zr_copy_chunks(const zr_layout *J, const uint64_t *L, uint64_t n, unsigned char *dst,
+                            const int dorg[3], const int ddims[3], zr_dest *each, int nthreads,
+                            double *range);
+
+/* Zarr v3 with one sharding level: the byte range in its shard of each of
+ * @p n read units at grid positions @p idx (n x ZR_MAX_DIM numbers) into
+ * off[i], len[i], missing[i] = 1 when absent (no shard, an empty inner
+ * chunk). The shard indexes not cached are read once each, @p window at
+ * a time through zr_store_get_many (their bytes at most a quarter of the
+ * memory budget), checked, and cached; *file_bytes (may be NULL) grows by
+ * their bytes. Errors: as zr3_read_sharded's. */
+vv_status zr3_locate_many(const zr_array *a, uint64_t n, const uint64_t *idx, uint64_t *off,
+                          uint64_t *len, unsigned char *missing, int window, uint64_t *file_bytes);
+
 /* The bytes one read of a chunk of @p n decoded bytes holds besides the
  * caller's buffer (what is read, the steps of decoding), at most. */
 uint64_t vv_zr_read_held(const zr_array *a, size_t n);

@@ -33,6 +33,7 @@
 
 #include "core/crc32c.h"
 #include "core/internal.h"
+#include "io/store/bytesrc.h"
 #include "io/store/zarr.h"
 
 /* ---- the shard index cache ---- */
@@ -641,55 +642,38 @@ cmp_range(const void *x, const void *y) {
     return a[0] < b[0] ? -1 : a[0] > b[0];
 }
 
-/* Reads and checks the index of the shard at bytes [off, off + len) of
- * @p key (len ZR_ALL: the whole object, level 0) at sharding level @p l:
- * *ent (2 count numbers, free it) and the shard's size *size. Entries
- * past the shard's end, overlapping ones or overlapping the index, and a
- * bad checksum are refused. */
-static vv_status
-load_index(const zr_array *a, int l, const char *key, uint64_t off, uint64_t len, uint64_t count,
-           uint64_t **ent_out, uint64_t *size, int *missing, uint64_t *file_bytes) {
+/* The bytes of a level-@p l shard index of @p count entries (with its
+ * checksum) into *ib; *big = 1 when its numbers are big-endian. */
+static void
+index_size(const zr_array *a, int l, uint64_t count, uint64_t *ib, int *big) {
     const zr_chain *ic = &a->index_chain[l];
-    uint64_t ib = count * 16;
-    int big = 0;
+    *ib = count * 16;
+    *big = 0;
     for (int i = 0; i < ic->n; i++) {
         if (ic->c[i].kind == ZC_CRC32C)
-            ib += 4;
+            *ib += 4;
         if (ic->c[i].kind == ZC_BYTES)
-            big = ic->c[i].big;
+            *big = ic->c[i].big;
     }
-    unsigned char *raw = NULL;
-    size_t m = 0;
-    uint64_t objsize = 0, ioff;
-    vv_status s;
-    if (len == ZR_ALL) {
-        s = zr_store_get(a, key, a->index_start[l] ? 0 : ZR_SUFFIX, ib, ib, &raw, &m, &objsize,
-                         missing);
-        if (s != VV_OK || *missing)
-            return s;
-        len = objsize;
-        ioff = a->index_start[l] ? 0 : objsize - ib;
-    } else {
-        if (len < ib)
-            return vv_error_set(VV_ERR_FORMAT,
-                                "%s: a nested shard of %llu bytes is smaller than its index (%llu)",
-                                key, (unsigned long long)len, (unsigned long long)ib);
-        ioff = a->index_start[l] ? 0 : len - ib;
-        s = zr_store_get(a, key, off + ioff, ib, ib, &raw, &m, NULL, NULL);
-        if (s != VV_OK)
-            return s;
-    }
-    if (file_bytes)
-        *file_bytes += m;
+}
+
+/* Checks and decodes the raw index @p raw (@p m bytes) of a level-@p l
+ * shard of @p len bytes whose index lies at @p ioff: *ent (2 count numbers,
+ * free it). Entries past the shard's end, overlapping ones or overlapping
+ * the index, and a bad checksum are refused. */
+static vv_status
+parse_index(const zr_array *a, int l, const char *key, const unsigned char *raw, size_t m,
+            uint64_t len, uint64_t ioff, uint64_t count, uint64_t **ent_out) {
+    const zr_chain *ic = &a->index_chain[l];
+    uint64_t ib;
+    int big;
+    index_size(a, l, count, &ib, &big);
     uint64_t *ent = malloc((size_t)count * 16);
-    if (!ent) {
-        free(raw);
+    if (!ent)
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a shard index");
-    }
     char what[2300];
     snprintf(what, sizeof what, "%s: shard index", key);
-    s = zr3_decode_bytes(ic, raw, m, (unsigned char *)ent, (size_t)count * 16, what);
-    free(raw);
+    vv_status s = zr3_decode_bytes(ic, raw, m, (unsigned char *)ent, (size_t)count * 16, what);
     if (s == VV_OK && big == vv_host_is_little_endian())
         vv_byteswap(ent, count * 2, 8);
     /* every chunk inside the shard, clear of the index and of each other */
@@ -733,8 +717,60 @@ load_index(const zr_array *a, int l, const char *key, uint64_t off, uint64_t len
         return s;
     }
     *ent_out = ent;
-    *size = len;
     return VV_OK;
+}
+
+/* The read of the index of a whole (level-0) shard @p key: a suffix (or,
+ * index_location "start", a prefix) of its exact size. */
+static void
+index_get(const zr_array *a, const char *key, uint64_t count, bs_get *g) {
+    uint64_t ib;
+    int big;
+    index_size(a, 0, count, &ib, &big);
+    *g = (bs_get){.key = key, .off = a->index_start[0] ? 0 : ZR_SUFFIX, .len = ib, .max = ib};
+}
+
+/* Reads and checks the index of the shard at bytes [off, off + len) of
+ * @p key (len ZR_ALL: the whole object, level 0) at sharding level @p l:
+ * *ent (2 count numbers, free it) and the shard's size *size. */
+static vv_status
+load_index(const zr_array *a, int l, const char *key, uint64_t off, uint64_t len, uint64_t count,
+           uint64_t **ent_out, uint64_t *size, int *missing, uint64_t *file_bytes) {
+    uint64_t ib;
+    int big;
+    index_size(a, l, count, &ib, &big);
+    unsigned char *raw = NULL;
+    size_t m = 0;
+    uint64_t ioff;
+    vv_status s;
+    if (len == ZR_ALL) {
+        bs_get g;
+        index_get(a, key, count, &g);
+        s = zr_store_get_many(a, &g, 1);
+        *missing = g.missing;
+        raw = g.out;
+        m = g.n;
+        if (s != VV_OK || *missing)
+            return s;
+        len = g.size;
+        ioff = a->index_start[l] ? 0 : g.size - ib;
+    } else {
+        if (len < ib)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: a nested shard of %llu bytes is smaller than its index (%llu)",
+                                key, (unsigned long long)len, (unsigned long long)ib);
+        ioff = a->index_start[l] ? 0 : len - ib;
+        s = zr_store_get(a, key, off + ioff, ib, ib, &raw, &m, NULL, NULL);
+        if (s != VV_OK)
+            return s;
+    }
+    if (file_bytes)
+        *file_bytes += m;
+    s = parse_index(a, l, key, raw, m, len, ioff, count, ent_out);
+    free(raw);
+    if (s == VV_OK)
+        *size = len;
+    return s;
 }
 
 vv_status
@@ -789,15 +825,115 @@ zr3_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
     char what[2300];
     snprintf(what, sizeof what, "%s: inner chunk at bytes %llu..%llu", key, (unsigned long long)off,
              (unsigned long long)(off + len));
-    const zr_chain *c = &a->chain[a->nshard];
-    s = zr3_decode_bytes(c, src, m, out, n, what);
+    s = vv_zr_decode_unit(a, src, m, out, n, what);
     free(src);
-    unsigned char *tmp = NULL;
-    for (int i = 0; s == VV_OK && i < c->n && !tmp; i++)
-        if (c->c[i].kind == ZC_TRANSPOSE && !(tmp = malloc(n)))
-            s = vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes", n);
-    if (s == VV_OK && tmp)
-        zr3_untranspose(c, a->ndim, a->chunks, a->esize, out, tmp);
-    free(tmp);
+    return s;
+}
+
+/* One read unit whose shard index is not cached: its shard, its entry. */
+typedef struct zr_need {
+    uint64_t id, p, i;
+} zr_need;
+
+static int
+cmp_need(const void *x, const void *y) {
+    const zr_need *a = x, *b = y;
+    if (a->id != b->id)
+        return a->id < b->id ? -1 : 1;
+    return a->i < b->i ? -1 : a->i > b->i;
+}
+
+vv_status
+zr3_locate_many(const zr_array *a, uint64_t n, const uint64_t *idx, uint64_t *off, uint64_t *len,
+                unsigned char *missing, int window, uint64_t *file_bytes) {
+    if (a->nshard != 1)
+        return vv_error_set(VV_ERR_INVALID, "zr3_locate_many: %d sharding levels", a->nshard);
+    zr_need *need = malloc((size_t)(n ? n : 1) * sizeof *need);
+    if (!need)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for %llu chunk reads",
+                            (unsigned long long)n);
+    uint64_t nn = 0, count = 1;
+    for (int d = 0; d < a->ndim; d++)
+        count *= a->cshape[0][d] / a->cshape[1][d];
+    for (uint64_t i = 0; i < n; i++) {
+        const uint64_t *x = idx + i * ZR_MAX_DIM;
+        uint64_t p = 0, id = 0;
+        for (int d = 0; d < a->ndim; d++) {
+            const uint64_t e0 = x[d] * a->chunks[d];
+            const uint64_t per = a->cshape[0][d] / a->cshape[1][d];
+            const uint64_t grid = (a->shape[d] + a->cshape[0][d] - 1) / a->cshape[0][d];
+            p = p * per + (e0 % a->cshape[0][d]) / a->cshape[1][d];
+            id = id * grid + e0 / a->cshape[0][d];
+        }
+        uint64_t o[2], size = 0;
+        missing[i] = 0;
+        if (cache_find(a->cache, 0, id, p, o, &size)) {
+            missing[i] = o[0] == UINT64_MAX && o[1] == UINT64_MAX;
+            off[i] = o[0];
+            len[i] = o[1];
+        } else {
+            need[nn++] = (zr_need){id, p, i};
+        }
+    }
+    qsort(need, (size_t)nn, sizeof *need, cmp_need);
+    /* the shards' indexes, each fetched once, a window of them in flight
+     * together: at most a quarter of the memory budget of index bytes */
+    uint64_t ib;
+    int big;
+    index_size(a, 0, count, &ib, &big);
+    const uint64_t quarter = vv_memory_budget_get() / 4;
+    if (window < 1)
+        window = 1;
+    if ((uint64_t)window * ib > quarter)
+        window = quarter / ib > 1 ? (int)(quarter / ib) : 1;
+    bs_get *g = calloc((size_t)window, sizeof *g);
+    char *keys = malloc((size_t)window * 2200);
+    uint64_t *first = malloc((size_t)(window + 1) * sizeof *first);
+    vv_status s =
+        g && keys && first ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory for shard indexes");
+    for (uint64_t k = 0; s == VV_OK && k < nn;) {
+        int w = 0; /* the window's shards: need[first[u] .. first[u + 1]) each */
+        uint64_t j = k;
+        while (j < nn && w < window) {
+            first[w] = j;
+            uint64_t top[ZR_MAX_DIM];
+            const uint64_t *x = idx + need[j].i * ZR_MAX_DIM;
+            for (int d = 0; d < a->ndim; d++)
+                top[d] = x[d] * a->chunks[d] / a->cshape[0][d];
+            zr_chunk_key(a, top, keys + (size_t)w * 2200, 2200);
+            index_get(a, keys + (size_t)w * 2200, count, &g[w]);
+            w++;
+            const uint64_t id = need[j].id;
+            while (j < nn && need[j].id == id)
+                j++;
+        }
+        first[w] = j;
+        s = zr_store_get_many(a, g, w);
+        for (int u = 0; u < w; u++) {
+            uint64_t *ent = NULL;
+            if (s == VV_OK && !g[u].missing) {
+                if (file_bytes)
+                    *file_bytes += g[u].n;
+                const uint64_t ioff = a->index_start[0] ? 0 : g[u].size - ib;
+                s = parse_index(a, 0, g[u].key, g[u].out, g[u].n, g[u].size, ioff, count, &ent);
+            }
+            for (uint64_t q = first[u]; s == VV_OK && q < first[u + 1]; q++) {
+                const uint64_t i = need[q].i, p = need[q].p;
+                /* no shard, or an empty inner chunk: the fill value */
+                missing[i] = !ent || (ent[2 * p] == UINT64_MAX && ent[2 * p + 1] == UINT64_MAX);
+                off[i] = ent ? ent[2 * p] : 0;
+                len[i] = ent ? ent[2 * p + 1] : 0;
+            }
+            if (ent)
+                cache_put(a->cache, 0, need[first[u]].id, ent, count, g[u].size);
+            free(g[u].out);
+            g[u].out = NULL;
+        }
+        k = j;
+    }
+    free(first);
+    free(keys);
+    free(g);
+    free(need);
     return s;
 }

@@ -33,6 +33,31 @@ zp_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsi
                             file_bytes, NULL);
 }
 
+/* A remote store's chunks of one level in batches (vv_zr_copy_chunks). */
+static vv_status
+zp_read_many(void *ctx, int level, int n, const int *c, unsigned char *const *dst, const int *org,
+             const int *dims, int nthreads, int *missing, uint64_t *file_bytes) {
+    const zp_level *l = &((const zp_store *)ctx)->lv[level];
+    uint64_t *L = calloc((size_t)(n > 0 ? n : 1), sizeof *L);
+    zr_dest *d = calloc((size_t)(n > 0 ? n : 1), sizeof *d);
+    vv_status s = L && d ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory for %d chunks", n);
+    for (int i = 0; s == VV_OK && i < n; i++) {
+        L[i] = vv_zr_chunk_linear(&l->J, c + 3 * i);
+        d[i].dst = dst[i];
+        memcpy(d[i].org, org + 3 * i, sizeof d[i].org);
+        memcpy(d[i].dims, dims + 3 * i, sizeof d[i].dims);
+    }
+    if (s == VV_OK)
+        s = vv_zr_copy_chunks(&l->J, L, (uint64_t)n, NULL, NULL, NULL, d, nthreads, NULL);
+    for (int i = 0; s == VV_OK && i < n; i++) {
+        missing[i] = d[i].missing;
+        file_bytes[i] = d[i].file_bytes;
+    }
+    free(L);
+    free(d);
+    return s;
+}
+
 static void
 zp_close(void *ctx) {
     zp_store *z = ctx;
@@ -94,6 +119,10 @@ vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time, vv_lo
     /* a remote store's reads wait on the network: as many at once as the
      * transport keeps in flight */
     st->parallel = bs_is_url(path) ? bs_http_in_flight() : 1;
+    /* and they are asked together, many in flight (a local store's are
+     * read chunk by chunk on the cores) */
+    if (bs_is_url(path))
+        st->read_many = zp_read_many;
     for (int i = 0; i < n_levels; i++) {
         if ((s = zp_open_level(z, path, i, channel, time, info)) != VV_OK)
             return s;
@@ -104,6 +133,9 @@ vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time, vv_lo
         vv_zr_geometry(&l->J, st->lv[i].hdr);
         st->scratch = l->J.cbytes > st->scratch ? l->J.cbytes : st->scratch;
     }
+    for (int i = 0; i < z->n_levels; i++)
+        if (z->lv[i].a.zarr_format == 3 && z->lv[i].a.nshard > 1)
+            st->read_many = NULL; /* nested shards: a thread a request, read_chunk */
     st->n_channels = (int)z->lv[0].J.nc;
     st->n_times = (int)z->lv[0].J.nt;
     st->has_range = z->lv[0].a.has_window;

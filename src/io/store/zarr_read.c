@@ -586,19 +586,25 @@ vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
         return s;
     if (file_bytes)
         *file_bytes = m;
-    if (a->zarr_format != 3) {
-        s = decode_v2(a, src, m, out, n, key);
-    } else {
-        s = zr3_decode_bytes(&a->chain[0], src, m, out, n, key);
-        unsigned char *tmp = NULL;
-        for (int i = 0; s == VV_OK && i < a->chain[0].n && !tmp; i++)
-            if (a->chain[0].c[i].kind == ZC_TRANSPOSE && !(tmp = malloc(n)))
-                s = vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes", n);
-        if (s == VV_OK && tmp)
-            zr3_untranspose(&a->chain[0], a->ndim, a->chunks, a->esize, out, tmp);
-        free(tmp);
-    }
+    s = vv_zr_decode_unit(a, src, m, out, n, key);
     free(src);
+    return s;
+}
+
+vv_status
+vv_zr_decode_unit(const zr_array *a, const unsigned char *src, size_t m, unsigned char *out,
+                  size_t n, const char *what) {
+    if (a->zarr_format != 3)
+        return decode_v2(a, src, m, out, n, what);
+    const zr_chain *c = &a->chain[a->nshard];
+    vv_status s = zr3_decode_bytes(c, src, m, out, n, what);
+    unsigned char *tmp = NULL;
+    for (int i = 0; s == VV_OK && i < c->n && !tmp; i++)
+        if (c->c[i].kind == ZC_TRANSPOSE && !(tmp = malloc(n)))
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes", n);
+    if (s == VV_OK && tmp)
+        zr3_untranspose(c, a->ndim, a->chunks, a->esize, out, tmp);
+    free(tmp);
     return s;
 }
 
@@ -742,12 +748,9 @@ vv_zr_chunk_linear(const zr_layout *J, const int c[3]) {
     return L;
 }
 
-vv_status
-vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned char *dst,
-                 const int dorg[3], const int ddims[3], int *missing_out, uint64_t *file_bytes,
-                 double *range) {
+void
+vv_zr_unit_index(const zr_layout *J, uint64_t L, uint64_t idx[ZR_MAX_DIM]) {
     const zr_array *a = J->a;
-    uint64_t idx[ZR_MAX_DIM];
     for (int i = a->ndim - 1; i >= 0; i--) {
         if (i == J->cax)
             idx[i] = J->ch / a->chunks[i];
@@ -758,12 +761,29 @@ vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned ch
             L /= J->nchunk[i];
         }
     }
+}
+
+vv_status
+vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned char *dst,
+                 const int dorg[3], const int ddims[3], int *missing_out, uint64_t *file_bytes,
+                 double *range) {
+    uint64_t idx[ZR_MAX_DIM];
+    vv_zr_unit_index(J, L, idx);
     int missing = 0;
-    vv_status s = vv_zr_read_chunk(a, idx, buf, J->cbytes, &missing, file_bytes);
+    vv_status s = vv_zr_read_chunk(J->a, idx, buf, J->cbytes, &missing, file_bytes);
     if (s != VV_OK)
         return s;
     if (missing_out)
         *missing_out = missing;
+    vv_zr_place_unit(J, idx, buf, missing, dst, dorg, ddims, range);
+    return VV_OK;
+}
+
+void
+vv_zr_place_unit(const zr_layout *J, const uint64_t idx[ZR_MAX_DIM], unsigned char *buf,
+                 int missing, unsigned char *dst, const int dorg[3], const int ddims[3],
+                 double *range) {
+    const zr_array *a = J->a;
     const size_t vs = a->esize;
     if (missing)
         vv_zr_fill(buf, J->cbytes / vs, a->type, a->fill);
@@ -812,7 +832,6 @@ vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned ch
             if (range) /* the row just written, in this core's cache */
                 vv_range_accumulate(a->type, d, (size_t)n[0], range);
         }
-    return VV_OK;
 }
 
 static vv_status
@@ -835,9 +854,11 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
      * decodes it from (an inner chunk of a shard) */
     const uint64_t per = (uint64_t)J.cbytes + vv_zr_read_held(ap, J.cbytes);
     int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
-    /* a remote store's reads wait on the network: as many at once as the
-     * transport keeps in flight */
-    if (bs_is_url(ap->root) && nthreads > 1 && bs_http_in_flight() > nthreads)
+    /* a remote store's reads are batched (vv_zr_copy_chunks), but those of
+     * nested shards wait on the network one at a time a thread: as many
+     * threads as the transport keeps requests in flight */
+    if (bs_is_url(ap->root) && ap->zarr_format == 3 && ap->nshard > 1 && nthreads > 1 &&
+        bs_http_in_flight() > nthreads)
         nthreads = bs_http_in_flight();
     const uint64_t budget = vv_memory_budget_get();
     if (per * (uint64_t)nthreads > budget)
@@ -859,46 +880,19 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
     vv_volume *v = NULL;
     if ((s = vv_volume_new(&v, dims, ap->type)) != VV_OK)
         return s;
-    /* the chunks in parallel, each thread its own buffer; the error of the
-     * first failing chunk in order */
-    long long first = -1;
-    vv_status first_status = VV_OK;
-    char first_msg[1024] = "";
-    const int zero[3] = {0, 0, 0};
-    /* the value range measured as the chunks are copied (no pass after);
-     * not at all in the reader sandbox (one_shot), whose parent trusts no
-     * range it is sent and measures the voxels again */
+    /* the chunks on nthreads threads, each its own buffer (a remote store's
+     * fetched in batches meanwhile); the value range measured as the chunks
+     * are copied (no pass after); not at all in the reader sandbox
+     * (one_shot), whose parent trusts no range it is sent and measures the
+     * voxels again */
     double range[2] = {INFINITY, -INFINITY};
     const int want_range = !opt->one_shot;
-#pragma omp parallel num_threads(nthreads)
-    {
-        unsigned char *buf = malloc(J.cbytes);
-        double mine[2] = {INFINITY, -INFINITY};
-#pragma omp for schedule(dynamic, 1)
-        for (long long L = 0; L < (long long)n_spatial; L++) {
-            vv_status cs = buf ? vv_zr_copy_chunk(&J, (uint64_t)L, buf, v->data, zero, dims, NULL,
-                                                  NULL, want_range ? mine : NULL)
-                               : vv_error_set(VV_ERR_NOMEM,
-                                              "out of memory for a chunk of %zu bytes", J.cbytes);
-            if (cs != VV_OK) {
-#pragma omp critical(vv_zarr_err)
-                if (first < 0 || L < first) {
-                    first = L;
-                    first_status = cs;
-                    snprintf(first_msg, sizeof first_msg, "%s", vv_error_message());
-                }
-            }
-        }
-        free(buf);
-#pragma omp critical(vv_zarr_range)
-        {
-            range[0] = mine[0] < range[0] ? mine[0] : range[0];
-            range[1] = mine[1] > range[1] ? mine[1] : range[1];
-        }
-    }
-    if (first >= 0) {
+    const int zero[3] = {0, 0, 0};
+    s = vv_zr_copy_chunks(&J, NULL, n_spatial, v->data, zero, dims, NULL, nthreads,
+                          want_range ? range : NULL);
+    if (s != VV_OK) {
         vv_volume_free(v);
-        return vv_error_set(first_status, "%s", first_msg);
+        return s;
     }
     vv_zr_geometry(&J, v);
     if (want_range)

@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Same-run pairs over HTTP: one Zarr v3 level read whole by URL from nginx on
+loopback, by VolVis (bench_zarr_read given the URL) and by zarr-python 3 through
+fsspec/aiohttp (`zarr.open_array(URL)[...]`), median of REPEAT reads each (default 3).
+
+Run with the virtual environment's Python (scripts/install-deps.sh bench):
+
+    .venv/bin/python bench/remote_read_pairs.py build/release/bench/bench_zarr_read \\
+        [--size 256] [--chunk 32] [--shard 128] [--threads 2] [--repeat 3] \\
+        [--out build/bench-out/remote_read]
+
+Writes a SIZE^3 u16 store (a smooth field plus noise, zstd 3, CHUNK^3 chunks in
+SHARD^3 shards; --shard 0: not sharded) with zarr-python 3 as bench/zarr_read_pairs.py
+does, and serves its folder with Debian's nginx (one worker, a configuration of its own,
+a free loopback port, no added latency). Each reader reads once untimed (connections
+made, the files in the page cache), then REPEAT times. VolVis runs with
+VOLVIS_HTTP_STATS=1 and reports how many requests it made and the most it had in
+flight at once. zarr-python runs with its defaults for a remote store (fsspec's
+HTTPFileSystem over aiohttp, zarr's async.concurrency 10) and threading.max_workers
+THREADS. The voxel sums must agree, or the run fails. Prints
+anchor lines and the ratio zarr-python / VolVis (above 1: VolVis is faster).
+"""
+import argparse
+import os
+import re
+import shutil
+import socket
+import statistics
+import subprocess
+import sys
+import time
+
+import numpy as np
+import zarr
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from zarr_read_pairs import make_store  # noqa: E402
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def start_nginx(root, out):
+    nginx = shutil.which("nginx") or "/usr/sbin/nginx"
+    if not os.path.exists(nginx):
+        sys.exit("remote_read_pairs: nginx is missing (apt-get install nginx-light)")
+    port = free_port()
+    conf = os.path.join(out, "nginx.conf")
+    with open(conf, "w") as f:
+        f.write(f"""daemon off;
+master_process off;
+worker_processes 1;
+pid {out}/nginx.pid;
+error_log {out}/error.log;
+events {{ worker_connections 1024; }}
+http {{
+  access_log off;
+  client_body_temp_path {out}/tmp_body;
+  proxy_temp_path {out}/tmp_proxy;
+  fastcgi_temp_path {out}/tmp_fcgi;
+  uwsgi_temp_path {out}/tmp_uwsgi;
+  scgi_temp_path {out}/tmp_scgi;
+  default_type application/octet-stream;
+  keepalive_requests 100000;
+  server {{ listen 127.0.0.1:{port}; root {root}; }}
+}}
+""")
+    p = subprocess.Popen([nginx, "-c", conf, "-p", out, "-e", f"{out}/error.log"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    end = time.monotonic() + 15
+    while time.monotonic() < end:
+        try:
+            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
+                return p, port
+        except OSError:
+            time.sleep(0.05)
+    p.kill()
+    sys.exit("remote_read_pairs: nginx did not start")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("bench")
+    ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--chunk", type=int, default=32)
+    ap.add_argument("--shard", type=int, default=128)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--out", default="build/bench-out/remote_read")
+    a = ap.parse_args()
+    out = os.path.abspath(a.out)
+    www = os.path.join(out, "www")
+    os.makedirs(www, exist_ok=True)
+    name = f"u16_{a.size}_zstd_c{a.chunk}_s{a.shard}.zarr"
+    make_store(os.path.join(www, name), a.size, a.chunk, a.shard, "zstd")
+    nginx, port = start_nginx(www, out)
+    url = f"http://127.0.0.1:{port}/{name}"
+    env = {k: v for k, v in os.environ.items() if not k.lower().endswith("_proxy")}
+    env["VOLVIS_HTTP_STATS"] = "1"
+    for k in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY"):
+        os.environ.pop(k, None)
+    try:
+        zarr.config.set({"threading.max_workers": a.threads})
+        arr = zarr.open_array(url, mode="r")
+        v = arr[...]  # warm: the session and its connections made
+        times = []
+        for _ in range(a.repeat):
+            t0 = time.perf_counter()
+            v = zarr.open_array(url, mode="r")[...]
+            times.append(time.perf_counter() - t0)
+        t_zarr = statistics.median(times)
+        sum_zarr = float(v.astype(np.float64).sum())
+        del v
+        r = subprocess.run([a.bench, url, "--threads", str(a.threads), "--repeat",
+                            str(a.repeat)], capture_output=True, text=True, env=env)
+    finally:
+        nginx.terminate()
+        nginx.wait(timeout=10)
+    if r.returncode != 0:
+        sys.exit(f"remote_read_pairs: {a.bench} failed: {r.stderr.strip()}")
+    vals = {}
+    for line in r.stdout.splitlines():
+        f = dict(kv.split("=", 1) for kv in line.split())
+        vals[f["op"]] = float(f["value"])
+    t_vv, sum_vv = vals["zarr_read"], vals["zarr_read_sum"]
+    m = re.search(r"(\d+) requests, at most (\d+) in flight", r.stderr)
+    if sum_vv != sum_zarr:
+        sys.exit(f"remote_read_pairs: the readers disagree: volvis {sum_vv}, zarr-python "
+                 f"{sum_zarr}")
+    for who, t in (("zarr-python", t_zarr), ("volvis", t_vv)):
+        print(f"anchor={who} op=remote_read dataset={name} value={t:.4f} unit=s", flush=True)
+    print(f"# {name} by URL (nginx, loopback), {a.threads} threads, median of {a.repeat}: "
+          f"volvis {t_vv:.3f} s, zarr-python + fsspec {t_zarr:.3f} s "
+          f"({t_zarr / t_vv:.2f}x); volvis: "
+          f"{m.group(1) if m else '?'} requests in all, at most "
+          f"{m.group(2) if m else '?'} in flight")
+
+
+if __name__ == "__main__":
+    main()
