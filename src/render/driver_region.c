@@ -573,6 +573,7 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
             rg.object = object;
             rg.whole = proxy ? &wv : NULL;
             rg.rays = pass ? &rays : NULL;
+            rg.from = hdr; /* the brick known by its box: a renderer may keep it */
             vv_region_rect(&rg, i2w, view, in.slo, in.shi);
             if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)
                 continue; /* off screen */
@@ -687,6 +688,8 @@ node_region(const mr_frame *f, int L, const int n0[3], const int n1[3], vv_rende
     const vv_volume *h = f->src->level(f->src->user, L);
     memset(rg, 0, sizeof *rg);
     rg->object = f->object;
+    rg->from = h; /* the node known by its level and box: a renderer may keep it */
+    rg->level = L;
     for (int k = 0; k < 3; k++) {
         const double lo = (n0[k] - f->b[L][k]) / f->a[L][k], hi = (n1[k] - f->b[L][k]) / f->a[L][k];
         slo[k] = (int)floor(lo) - f->ghost;
