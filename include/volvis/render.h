@@ -286,6 +286,11 @@ const char *vv_option_type_name(vv_option_type t);
  * (vv_object.channels) combined by its blend rule; a renderer without it
  * refuses such an object (vv_renderer_check_world) */
 #define VV_RENDERER_CHANNELS 32u
+/** draws on a device whose memory belongs to the renderer (the gpu
+ * renderer's brick cache): the drivers draw its regions in turn with it,
+ * never on clones of it for other threads (a clone's device and cache
+ * would last one frame) */
+#define VV_RENDERER_DEVICE 64u
 
 /**
  * What a rendering method is, draws and takes. Immutable, owned by the

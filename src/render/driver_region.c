@@ -855,7 +855,9 @@ progressive_level(mr_frame *f, mr_node *nd, int *budget) {
 /* How many nodes render_nodes_concurrent draws at a time: the source's
  * boxes, the threads the frame may use, at most MR_MAX_THREADS; 1 (render
  * them in turn, each on every thread) for a renderer with global effects
- * (its whole-volume context would be built once per thread) or when nested
+ * (its whole-volume context would be built once per thread), one on a
+ * device (VV_RENDERER_DEVICE: a clone's device and bricks would last one
+ * frame), or when nested
  * parallel regions are active (each node's own loops would then fork). */
 static int
 node_threads(const mr_frame *f) {
@@ -864,7 +866,7 @@ node_threads(const mr_frame *f) {
     t = t < boxes ? t : boxes;
     t = t < MR_MAX_THREADS ? t : MR_MAX_THREADS;
     if (t < 2 || f->n_nodes < 2 || omp_get_max_active_levels() > 1 || omp_in_parallel() ||
-        (f->r->ops->info.caps & VV_RENDERER_GLOBAL) || !f->r->clone)
+        (f->r->ops->info.caps & (VV_RENDERER_GLOBAL | VV_RENDERER_DEVICE)) || !f->r->clone)
         return 1;
     return t;
 }

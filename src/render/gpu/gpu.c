@@ -1205,8 +1205,9 @@ gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_valu
 static const char *const gpu_auto[] = {"auto", NULL};
 
 #if VV_HAVE_VULKAN
-/* out of core by bricks and under MPI; channels (up to GPU_MAX_CH, in memory) */
-#define GPU_CAPS (VV_RENDERER_REGION | VV_RENDERER_CHANNELS)
+/* out of core by bricks and under MPI; channels (up to GPU_MAX_CH, in memory);
+ * its regions drawn in turn on its own device (the brick cache) */
+#define GPU_CAPS (VV_RENDERER_REGION | VV_RENDERER_CHANNELS | VV_RENDERER_DEVICE)
 #else
 #define GPU_CAPS 0
 #endif
