@@ -494,7 +494,18 @@ upload_brick(gpu_state *st, gpu_brick *b, const vv_vcache *c, int what, int real
         return image_put(st, &b->img[what], c, what, data, used, 1, sent);
     }
     b->part[what] = 0;
+    const VkDeviceSize at = *used;
     vv_status s = image_put(st, &b->img[what], c, what, data, used, 0, sent);
+    if (s == VV_ERR_NOMEM && st->n_bricks > 1) {
+        /* the device is fuller than the budget thought (other programs,
+         * a budget over its memory): every other brick out, once more */
+        vv_error_clear();
+        for (int i = st->n_bricks - 1; i >= 0; i--)
+            if (st->bricks[i] != b)
+                brick_evict(st, i);
+        *used = at;
+        s = image_put(st, &b->img[what], c, what, data, used, 0, sent);
+    }
     if (s != VV_OK)
         return s;
     b->part[what] = data ? 2 : 1;
