@@ -9,7 +9,8 @@
 
 #include "cli.h"
 
-static const cli_opt_spec render_opts[] = {CLI_RENDER_OPT_SPECS, {"time-range", 0, "A:B[:STEP]"}};
+static const cli_opt_spec render_opts[] = {
+    CLI_RENDER_OPT_SPECS, {"time-range", 0, "A:B[:STEP]"}, {"repeat", 0, "N"}, {"stats", 0, NULL}};
 #define N_RENDER_OPTS ((int)(sizeof render_opts / sizeof render_opts[0]))
 
 void
@@ -34,6 +35,15 @@ cli_render_usage(FILE *out) {
                  "                   _tNNNN before .png (head.png: head_t0000.png, ...); the\n"
                  "                   transfer function and view of step A for all; each step\n"
                  "                   read while the one before is drawn\n"
+                 "  --repeat N       render the same frame N times (1 .. 100000) with one\n"
+                 "                   renderer, whose caches carry over (the gpu renderer's\n"
+                 "                   bricks on the device); writes the last frame, and the\n"
+                 "                   `wrote` line gives the last frame's time\n"
+                 "  --stats          print one line a frame to stdout, key=value pairs:\n"
+                 "                   frame= ms= (wall clock) device_ms= upload_bytes=\n"
+                 "                   (volume data sent to a device) cache_hits= cache_misses=\n"
+                 "                   (bricks found on, or uploaded to, the device) samples=\n"
+                 "                   (only renderers that count them report non-zero)\n"
                  "  -h, --help       show this help\n"
                  "\n"
                  "Renderers:\n");
@@ -155,6 +165,16 @@ cli_render_main(int argc, char **argv) {
         return rc;
     int range[3] = {0, 0, 1};
     const char *tr = cli_get(&a, "time-range");
+    int repeat = 1;
+    const char *rs = cli_get(&a, "repeat");
+    if (rs && (rc = cli_parse_int(&a, "repeat", rs, 1, 100000, &repeat)))
+        return rc;
+    const int show_stats = cli_count(&a, "stats") > 0;
+    if ((rs || show_stats) && (tr || r.progressive > 0))
+        return cli_usage_error(&a, "--repeat and --stats: one frame, not with --time-range or "
+                                   "--progressive");
+    if ((rs || show_stats) && vv_parallel_launched())
+        return cli_usage_error(&a, "--repeat and --stats: one process, not under mpirun");
     if (tr) {
         if ((rc = parse_time_range(&a, tr, range)))
             return rc;
@@ -222,12 +242,32 @@ cli_render_main(int argc, char **argv) {
     ro.lod = &lod;
     lod.progressive = r.progressive > 0 && cli_world_out_of_core(w);
     int steps = 0;
-    double t0 = cli_now();
-    for (;;) {
-        lod.load_budget = steps == 0 ? 0 : r.progressive;
+    double t0 = cli_now(), seconds = 0;
+    lod.load_budget = 0; /* a progressive frame's first step: from what is resident */
+    /* --repeat: the same frame again, the renderer's caches warm */
+    for (int frame = 1; frame <= repeat; frame++) {
+        stats = (vv_render_stats){0};
+        t0 = cli_now();
         vv_error_clear();
         s = vv_renderer_render(ren, w, &w->view, &ro, img);
-        if (s != VV_OK || !lod.progressive)
+        seconds = cli_now() - t0;
+        if (s != VV_OK || (frame < repeat && cli_interrupted()))
+            break;
+        if (show_stats) {
+            printf("frame=%d ms=%.3f device_ms=%.3f upload_bytes=%llu cache_hits=%u "
+                   "cache_misses=%u samples=%llu\n",
+                   frame, 1000 * seconds, stats.device_ms, (unsigned long long)stats.upload_bytes,
+                   (unsigned)stats.cache_hits, (unsigned)stats.cache_misses,
+                   (unsigned long long)stats.samples);
+            fflush(stdout);
+        }
+    }
+    for (; s == VV_OK && lod.progressive;) {
+        lod.load_budget = steps == 0 ? 0 : r.progressive;
+        vv_error_clear();
+        if (steps > 0)
+            s = vv_renderer_render(ren, w, &w->view, &ro, img);
+        if (s != VV_OK)
             break;
         char step[4200];
         cli_numbered_path(r.output, 'p', steps, step, sizeof step);
@@ -240,7 +280,8 @@ cli_render_main(int argc, char **argv) {
         if (lod.pending == 0)
             break;
     }
-    double seconds = cli_now() - t0;
+    if (lod.progressive)
+        seconds = cli_now() - t0;
     cli_progress_end(&pr);
     if (s == VV_OK && cli_interrupted())
         s = vv_error_set(VV_ERR_CANCELLED, "interrupted");

@@ -34,6 +34,8 @@ extern "C" {
  * The work of a render, counted for measurements (bench/bench_raycast's
  * shaded samples per second against the machine's peak). Counts are added
  * to what the struct holds; a render that counts nothing leaves it.
+ * Fields are only ever added at the end: initialise with `{0}` or by
+ * designated fields.
  */
 typedef struct vv_render_stats {
     uint64_t samples; /**< samples taken along rays (value and transfer-function entry) */
@@ -52,6 +54,20 @@ typedef struct vv_render_stats {
      * the view direction, the material or the object's orientation
      * changed; 0 when the previous frame's served) */
     uint32_t shading_tables_built;
+    /** bytes of volume data the frame copied to the device: voxel values,
+     * gradient codes and gradient magnitudes of a volume or of its bricks
+     * (the gpu renderer; the frame's uniforms, transfer-function tables and
+     * subvolume min/max, a few KiB a brick, are not counted; others add
+     * nothing) */
+    uint64_t upload_bytes;
+    /** bricks (the regions of a volume drawn out of core, by the drivers or
+     * over the device's memory) the frame found on the device, in the gpu
+     * renderer's brick cache (option device_memory_mb); others add nothing */
+    uint32_t cache_hits;
+    /** bricks the frame uploaded to the device because the brick cache did
+     * not hold them (first seen, evicted, or the cache is off); others add
+     * nothing */
+    uint32_t cache_misses;
 } vv_render_stats;
 
 #define VV_LOD_MAX_LEVELS 16 /**< levels a level-of-detail frame draws from */
@@ -172,7 +188,8 @@ typedef struct vv_render_options {
     vv_progress progress; /**< reports the fraction of image tiles done; may cancel */
     /** NULL, or where the render adds the work it did. Counted by the ray
      * caster's march of one composite volume (the common case and the
-     * speed anchor); other renderers and paths add nothing. Counting
+     * speed anchor), and by the gpu renderer (its device time, uploads and
+     * brick cache); other renderers and paths add nothing. Counting
      * neither changes the image nor costs measurable time. */
     vv_render_stats *stats;
     /**
@@ -303,6 +320,11 @@ const char *vv_option_type_name(vv_option_type t);
  * (vv_object.channels) combined by its blend rule; a renderer without it
  * refuses such an object (vv_renderer_check_world) */
 #define VV_RENDERER_CHANNELS 32u
+/** draws on a device whose memory belongs to the renderer (the gpu
+ * renderer's brick cache): the drivers draw its regions in turn with it,
+ * never on clones of it for other threads (a clone's device and cache
+ * would last one frame) */
+#define VV_RENDERER_DEVICE 64u
 
 /**
  * What a rendering method is, draws and takes. Immutable, owned by the

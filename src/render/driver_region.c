@@ -573,6 +573,7 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
             rg.object = object;
             rg.whole = proxy ? &wv : NULL;
             rg.rays = pass ? &rays : NULL;
+            rg.from = hdr; /* the brick known by its box: a renderer may keep it */
             vv_region_rect(&rg, i2w, view, in.slo, in.shi);
             if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)
                 continue; /* off screen */
@@ -687,6 +688,8 @@ node_region(const mr_frame *f, int L, const int n0[3], const int n1[3], vv_rende
     const vv_volume *h = f->src->level(f->src->user, L);
     memset(rg, 0, sizeof *rg);
     rg->object = f->object;
+    rg->from = h; /* the node known by its level and box: a renderer may keep it */
+    rg->level = L;
     for (int k = 0; k < 3; k++) {
         const double lo = (n0[k] - f->b[L][k]) / f->a[L][k], hi = (n1[k] - f->b[L][k]) / f->a[L][k];
         slo[k] = (int)floor(lo) - f->ghost;
@@ -852,7 +855,9 @@ progressive_level(mr_frame *f, mr_node *nd, int *budget) {
 /* How many nodes render_nodes_concurrent draws at a time: the source's
  * boxes, the threads the frame may use, at most MR_MAX_THREADS; 1 (render
  * them in turn, each on every thread) for a renderer with global effects
- * (its whole-volume context would be built once per thread) or when nested
+ * (its whole-volume context would be built once per thread), one on a
+ * device (VV_RENDERER_DEVICE: a clone's device and bricks would last one
+ * frame), or when nested
  * parallel regions are active (each node's own loops would then fork). */
 static int
 node_threads(const mr_frame *f) {
@@ -861,7 +866,7 @@ node_threads(const mr_frame *f) {
     t = t < boxes ? t : boxes;
     t = t < MR_MAX_THREADS ? t : MR_MAX_THREADS;
     if (t < 2 || f->n_nodes < 2 || omp_get_max_active_levels() > 1 || omp_in_parallel() ||
-        (f->r->ops->info.caps & VV_RENDERER_GLOBAL) || !f->r->clone)
+        (f->r->ops->info.caps & (VV_RENDERER_GLOBAL | VV_RENDERER_DEVICE)) || !f->r->clone)
         return 1;
     return t;
 }

@@ -292,7 +292,7 @@ test_slab_sample_count(void **state) {
      * the 4 rays, all shaded; added to what the counts held, from any
      * thread count; a transparent object takes none (skipped) */
     for (int threads = 1; threads <= 2; threads++) {
-        vv_render_stats st = {1, 1, 0, 0, 0};
+        vv_render_stats st = {.samples = 1, .shaded = 1};
         vv_render_options opt;
         vv_render_options_init(&opt);
         opt.threads = threads;

@@ -166,6 +166,20 @@ typedef struct vv_render_region {
      * Borrowed.
      */
     const vv_region_rays *rays;
+    /**
+     * Where the voxels come from, for a renderer that keeps them between
+     * frames (the gpu renderer's brick cache on the device), or NULL (an
+     * initializer's default): nothing to key on, the voxels are drawn and
+     * forgotten. The volume the voxels are a box of, made by vv_volume_new
+     * (a bricked file's header, a pyramid level's, or the volume itself in
+     * memory): the same object while the source is open, its `modified`
+     * bumped when its voxels change. A renderer that keys on it holds a
+     * reference (vv_volume_ref), so that the address stays unique; the
+     * voxels are then known by (from, from->modified, level, offset, the
+     * voxels' dims). Borrowed.
+     */
+    const vv_volume *from;
+    int level; /**< the pyramid level of `from` (0: the finest, or a volume of one level) */
 } vv_render_region;
 
 /** A region render's output: the partial image and how it combines. */

@@ -20,7 +20,19 @@
  * they change; per frame the tables, the uniform block, one dispatch of 8 x
  * 8 pixels a workgroup and the copy back of the RGBA float image and depth
  * (and keys, in a region render). vv_render_stats.device_ms gets the
- * device's time for the frame's commands.
+ * device's time for the frame's commands, upload_bytes the volume data
+ * sent.
+ *
+ * The brick cache: a region whose voxels the driver names by their source
+ * (vv_render_region.from: bricks and pyramid nodes out of core, the bricks
+ * of a volume over the device's memory) keeps its images on the device,
+ * keyed by (source volume and its change count, level, box), within the
+ * device budget (option device_memory_mb), least recently used out; a
+ * region found there is drawn without uploading its voxels
+ * (vv_render_stats.cache_hits, else cache_misses). Each region is still
+ * one dispatch of its own, and the driver still reads its voxels on the
+ * host (their subvolume min/max and transfer-function tables come from
+ * them); what the cache saves is the upload and the gradient codes.
  *
  * Draws one volume object (up to GPU_MAX_CH channels under the blend
  * rules) in composite, MIP, MinIP, X-ray and iso mode with a 1-D or 2-D
@@ -94,12 +106,28 @@ enum { I_VALUES, I_NORMALS, I_GMAG = 2 * GPU_MAX_CH, N_IMG };
 static const int image_binding[N_IMG] = {1, 2, 12, 15, 13, 16, 14, 17, 10};
 #define N_BINDINGS 18
 
+#if VV_HAVE_VULKAN
+/* A brick on the device (the brick cache): the voxels of one region known
+ * by its source's volume, that volume's change count, the level and the
+ * box (vv_render_region.from), as the images the shader samples. */
+typedef struct gpu_brick {
+    vv_volume *from; /* reference held, so that the address stays unique */
+    uint64_t modified;
+    int level, offset[3], dims[3];
+    vv_vk_image img[3]; /* values, gradient codes, gradient magnitudes */
+    int part[3];        /* each image: 0 none, 1 a 1 x 1 x 1 stand-in, 2 the brick's array */
+    VkDeviceSize bytes; /* of the arrays (part 2) */
+    uint64_t used;      /* the cache's clock when last drawn */
+} gpu_brick;
+#endif
+
 typedef struct gpu_state {
     vv_vcache_set vc;         /* the host's voxel caches (sample.h) */
     double early_termination; /* option */
     int skipping;             /* option empty_space_skipping */
     int device;               /* option device: -1 auto */
     double budget_mb;         /* option device_memory_mb: -1 auto */
+    int brick_cache;          /* option brick_cache */
     /* a volume over the device budget is drawn brick by brick by the
      * brick driver (drv_render_bricks) with this state's region renders,
      * its bricks' min/max computed once a volume */
@@ -143,14 +171,43 @@ typedef struct gpu_state {
     uint64_t dist_modified[GPU_MAX_CH];
     vv_vtables_key dist_key[GPU_MAX_CH];
     vv_vk_buffer readback; /* host: the image back */
+    /* the brick cache: the regions' voxels kept on the device between
+     * frames within the device budget, least recently used out */
+    gpu_brick **bricks;
+    int n_bricks, cap_bricks;
+    VkDeviceSize brick_bytes;
+    uint64_t brick_clock;
 #endif
 } gpu_state;
 
 #if VV_HAVE_VULKAN
 
+/* Brick @p i of the cache out of it (its images, its reference). */
+static void
+brick_evict(gpu_state *st, int i) {
+    gpu_brick *b = st->bricks[i];
+    for (int p = 0; p < 3; p++)
+        vv_vk_image_free(&st->vk, &b->img[p]);
+    st->brick_bytes -= b->bytes;
+    vv_volume_free(b->from);
+    free(b);
+    st->bricks[i] = st->bricks[--st->n_bricks];
+}
+
+static void
+brick_cache_clear(gpu_state *st) {
+    while (st->n_bricks > 0)
+        brick_evict(st, st->n_bricks - 1);
+    free(st->bricks);
+    st->bricks = NULL;
+    st->cap_bricks = 0;
+    st->brick_bytes = 0;
+}
+
 static void
 release_device(gpu_state *st) {
     vv_vk *vk = &st->vk;
+    brick_cache_clear(st);
     if (!vk->dev)
         return;
     vk->f.vkDestroyPipeline(vk->dev, st->pipe, NULL);
@@ -278,29 +335,39 @@ ensure_buffer(gpu_state *st, vv_vk_buffer *b, VkDeviceSize size, VkBufferUsageFl
     return vv_vk_buffer_new(&st->vk, size + size / 4, usage, host, b);
 }
 
-/* Image @p slot on the device from cache @p c (NULL: none) when it changed:
- * @p what 0 its values, 1 its gradient codes, 2 its gradient magnitudes, a
- * 1 x 1 x 1 image standing for an array it does not have; records the copy
- * into the command buffer being recorded, through the staging buffer from
- * *used on (*used: bytes of staging used). With @p dry, only adds to *used
- * the bytes it would take: the caller makes the staging buffer large
- * enough first, since a copy recorded from it must not see it replaced. */
+/* The array @p what (0 values, 1 gradient codes, 2 gradient magnitudes) of
+ * cache @p c, or NULL where it has none (c NULL: none). */
+static const void *
+cache_array(const vv_vcache *c, int what) {
+    return !c          ? NULL
+           : what == 0 ? (c->q16 ? (const void *)c->q16 : (const void *)c->f32)
+           : what == 1 ? (const void *)c->nrm
+                       : (const void *)c->gmag;
+}
+
+/* Bytes of array @p what of cache @p c on the device. */
+static VkDeviceSize
+array_bytes(const vv_vcache *c, int what) {
+    const VkDeviceSize n = (VkDeviceSize)c->nx * (VkDeviceSize)c->ny * (VkDeviceSize)c->nz;
+    return what == 0 ? n * (c->q16 ? 2 : 4) : what == 1 ? 2 * n : 4 * n;
+}
+
+/* Image *@p im made anew from @p data, array @p what of cache @p c (NULL
+ * data: a 1 x 1 x 1 image standing for an array there is not); records the
+ * copy into the command buffer being recorded, through the staging buffer
+ * from *used on (*used: bytes of staging used), and adds the array's bytes
+ * to *sent. With @p dry, only adds to *used the bytes it would take: the
+ * caller makes the staging buffer large enough first, since a copy
+ * recorded from it must not see it replaced. */
 static vv_status
-upload_image(gpu_state *st, int slot, const vv_vcache *c, int what, VkDeviceSize *used, int dry) {
+image_put(gpu_state *st, vv_vk_image *im, const vv_vcache *c, int what, const void *data,
+          VkDeviceSize *used, int dry, VkDeviceSize *sent) {
     vv_vk *vk = &st->vk;
     static const uint8_t no_gradient[2] = {0x80, 0x80}; /* VV_OCT_ZERO */
     static const float zero = 0;
-    const void *data = !c          ? NULL
-                       : what == 0 ? (c->q16 ? (const void *)c->q16 : (const void *)c->f32)
-                       : what == 1 ? (const void *)c->nrm
-                                   : (const void *)c->gmag;
-    if (st->from[slot].made && st->from[slot].data == data &&
-        (!data || (st->from[slot].vol == c->vol && st->from[slot].modified == c->modified)))
-        return VV_OK;
     const int one[3] = {1, 1, 1};
     const int dims[3] = {data ? c->nx : 1, data ? c->ny : 1, data ? c->nz : 1};
-    const size_t n = (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2];
-    const size_t bytes = what == 0 ? n * (data && c->q16 ? 2 : 4) : what == 1 ? 2 * n : 4 * n;
+    const size_t bytes = data ? (size_t)array_bytes(c, what) : what == 1 ? 2 : 4;
     const VkFormat fmt = what == 1                     ? VK_FORMAT_R8G8_SINT
                          : what == 0 && data && c->q16 ? VK_FORMAT_R16_UNORM
                                                        : VK_FORMAT_R32_SFLOAT;
@@ -309,18 +376,143 @@ upload_image(gpu_state *st, int slot, const vv_vcache *c, int what, VkDeviceSize
         *used += (bytes + 15) & ~(size_t)15;
         return VV_OK;
     }
-    vv_vk_image_free(vk, &st->img[slot]);
-    st->from[slot].made = 0;
-    vv_status s = vv_vk_image_new(vk, data ? dims : one, fmt, &st->img[slot]);
+    vv_vk_image_free(vk, im);
+    vv_status s = vv_vk_image_new(vk, data ? dims : one, fmt, im);
     if (s != VV_OK)
         return vv_error_prefix(s, "the volume (%d x %d x %d)", dims[0], dims[1], dims[2]);
     memcpy((unsigned char *)st->staging.map + *used, src, bytes);
-    vv_vk_copy_to_image(vk, &st->staging, *used, &st->img[slot]);
+    vv_vk_copy_to_image(vk, &st->staging, *used, im);
     *used += (bytes + 15) & ~(size_t)15;
+    if (data)
+        *sent += bytes;
+    return VV_OK;
+}
+
+/* Image @p slot on the device from cache @p c (NULL: none) when it changed:
+ * @p what 0 its values, 1 its gradient codes, 2 its gradient magnitudes, a
+ * 1 x 1 x 1 image standing for an array it does not have (image_put). */
+static vv_status
+upload_image(gpu_state *st, int slot, const vv_vcache *c, int what, VkDeviceSize *used, int dry,
+             VkDeviceSize *sent) {
+    const void *data = cache_array(c, what);
+    if (st->from[slot].made && st->from[slot].data == data &&
+        (!data || (st->from[slot].vol == c->vol && st->from[slot].modified == c->modified)))
+        return VV_OK;
+    if (!dry)
+        st->from[slot].made = 0;
+    vv_status s = image_put(st, &st->img[slot], c, what, data, used, dry, sent);
+    if (s != VV_OK || dry)
+        return s;
     st->from[slot].vol = c ? c->vol : NULL;
     st->from[slot].modified = c ? c->modified : 0;
     st->from[slot].data = data;
     st->from[slot].made = 1;
+    return VV_OK;
+}
+
+/* ---- the brick cache ---------------------------------------------------------- */
+
+/* The device budget in bytes (option device_memory_mb; auto: three
+ * quarters of the device's largest local heap), 0: no limit. */
+static double
+device_budget(const gpu_state *st) {
+    if (st->budget_mb >= 0)
+        return st->budget_mb * 1048576.0;
+    double budget = 0;
+    for (uint32_t h = 0; h < st->vk.mem.memoryHeapCount; h++)
+        if (st->vk.mem.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+            budget = fmax(budget, 0.75 * (double)st->vk.mem.memoryHeaps[h].size);
+    return budget;
+}
+
+/* The cached brick of region @p rg's voxels (its key: vv_render_region.from),
+ * found or added empty, marked used. Errors: VV_ERR_NOMEM. */
+static vv_status
+brick_lookup(gpu_state *st, const vv_render_region *rg, gpu_brick **out) {
+    const vv_volume *v = rg->voxels;
+    st->brick_clock++;
+    for (int i = 0; i < st->n_bricks; i++) {
+        gpu_brick *b = st->bricks[i];
+        if (b->from == rg->from && b->modified == rg->from->modified && b->level == rg->level &&
+            !memcmp(b->offset, rg->offset, sizeof b->offset) &&
+            !memcmp(b->dims, v->dims, sizeof b->dims)) {
+            b->used = st->brick_clock;
+            *out = b;
+            return VV_OK;
+        }
+    }
+    if (st->n_bricks == st->cap_bricks) {
+        const int cap = st->cap_bricks ? 2 * st->cap_bricks : 64;
+        gpu_brick **nb = realloc(st->bricks, sizeof *nb * (size_t)cap);
+        if (!nb)
+            return vv_error_set(VV_ERR_NOMEM, "gpu: out of memory (brick cache of %d)", cap);
+        st->bricks = nb;
+        st->cap_bricks = cap;
+    }
+    gpu_brick *b = calloc(1, sizeof *b);
+    if (!b)
+        return vv_error_set(VV_ERR_NOMEM, "gpu: out of memory (brick cache)");
+    b->from = vv_volume_ref((vv_volume *)rg->from);
+    b->modified = rg->from->modified;
+    b->level = rg->level;
+    memcpy(b->offset, rg->offset, sizeof b->offset);
+    memcpy(b->dims, v->dims, sizeof b->dims);
+    b->used = st->brick_clock;
+    st->bricks[st->n_bricks++] = b;
+    *out = b;
+    return VV_OK;
+}
+
+/* The least recently used bricks other than @p keep out until the cache
+ * and @p grow bytes more fit the device budget (or @p keep alone is left). */
+static void
+brick_trim(gpu_state *st, const gpu_brick *keep, VkDeviceSize grow) {
+    const double budget = device_budget(st);
+    while (budget > 0 && (double)(st->brick_bytes + grow) > budget) {
+        int lru = -1;
+        for (int i = 0; i < st->n_bricks; i++)
+            if (st->bricks[i] != keep && (lru < 0 || st->bricks[i]->used < st->bricks[lru]->used))
+                lru = i;
+        if (lru < 0)
+            return;
+        brick_evict(st, lru);
+    }
+}
+
+/* Image @p what of cached brick @p b from cache @p c: the array when
+ * @p real (and the brick has not got it yet), else a stand-in where it has
+ * no image; as upload_image. *grow gets the bytes of arrays it adds. */
+static vv_status
+upload_brick(gpu_state *st, gpu_brick *b, const vv_vcache *c, int what, int real,
+             VkDeviceSize *used, int dry, VkDeviceSize *sent, VkDeviceSize *grow) {
+    const void *data = real ? cache_array(c, what) : NULL;
+    if (b->part[what] == 2 || (!data && b->part[what] == 1))
+        return VV_OK;
+    if (dry) {
+        if (data)
+            *grow += array_bytes(c, what);
+        return image_put(st, &b->img[what], c, what, data, used, 1, sent);
+    }
+    b->part[what] = 0;
+    const VkDeviceSize at = *used;
+    vv_status s = image_put(st, &b->img[what], c, what, data, used, 0, sent);
+    if (s == VV_ERR_NOMEM && st->n_bricks > 1) {
+        /* the device is fuller than the budget thought (other programs,
+         * a budget over its memory): every other brick out, once more */
+        vv_error_clear();
+        for (int i = st->n_bricks - 1; i >= 0; i--)
+            if (st->bricks[i] != b)
+                brick_evict(st, i);
+        *used = at;
+        s = image_put(st, &b->img[what], c, what, data, used, 0, sent);
+    }
+    if (s != VV_OK)
+        return s;
+    b->part[what] = data ? 2 : 1;
+    if (data) {
+        b->bytes += array_bytes(c, what);
+        st->brick_bytes += array_bytes(c, what);
+    }
     return VV_OK;
 }
 
@@ -412,6 +604,9 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
     int nch = 0; /* caches: 1 a one-channel object, 2 .. GPU_MAX_CH channels */
     vv_object chobj[GPU_MAX_CH];
     vv_vcache *cc[GPU_MAX_CH] = {NULL};
+    /* a region's voxels known by their source (vv_render_region.from): kept
+     * on the device in the brick cache, uploaded only when it lacks them */
+    gpu_brick *brick = NULL;
     vv_vtables tabs[GPU_MAX_CH];
     int owns[GPU_MAX_CH] = {0};
     memset(tabs, 0, sizeof tabs);
@@ -441,6 +636,8 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                     vv_vchannel_object(obj, &obj->channels[k], &chobj[nch++]);
         } else {
             chobj[nch++] = *obj;
+            if (rg && rg->from && st->brick_cache && (s = brick_lookup(st, rg, &brick)) != VV_OK)
+                return s;
         }
         const double dt = vv_vobject_step(obj);
         for (int k = 0; k < nch && s == VV_OK; k++) {
@@ -450,7 +647,9 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                 s = vv_error_prefix(s, "object '%s'", obj->name);
                 break;
             }
-            if (ck->shading && (ck->mode == VV_MODE_COMPOSITE || ck->mode == VV_MODE_ISO)) {
+            /* a cached brick's gradient codes are on the device already */
+            if (ck->shading && (ck->mode == VV_MODE_COMPOSITE || ck->mode == VV_MODE_ISO) &&
+                !(brick && brick->part[1] == 2)) {
                 vv_vcache_need_normals(&st->vc, cc[k]);
                 if (!cc[k]->nrm && opt && opt->stats)
                     opt->stats->gradients_at_samples++;
@@ -493,7 +692,8 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
             u.chp[k][2] = cc[k]->q16 ? 65535.0f : 1.0f;
             u.chp[k][3] = tabs[k].pdist ? tabs[k].plo : -INFINITY;
             u.chq[k][0] = tabs[k].pdist ? tabs[k].phi : INFINITY;
-            u.chf[k][0] = (cc[k]->q16 ? F_INTEGER : 0) | (cc[k]->nrm ? F_NORMALS : 0);
+            const int normals = brick ? brick->part[1] == 2 || cc[k]->nrm : cc[k]->nrm != NULL;
+            u.chf[k][0] = (cc[k]->q16 ? F_INTEGER : 0) | (normals ? F_NORMALS : 0);
         }
         c = cc[0];
         double w2i[3][4], i2w[3][4];
@@ -627,6 +827,7 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
     if (s == VV_OK)
         s = vv_vk_begin(vk);
     VkDeviceSize used = total;
+    VkDeviceSize sent = 0, grow = 0; /* arrays sent; bytes the brick gains */
     if (s == VV_OK) {
         vv_vk_timestamp(vk, 0);
         /* the frame's data, then the images that changed: each channel's values
@@ -635,16 +836,37 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
          * is made large enough for all of it before anything is recorded */
         VkDeviceSize need = total;
         for (int dry = 1; dry >= 0 && s == VV_OK; dry--) {
+            if (!dry && brick) {
+                /* room for it: the least recently used bricks out; the
+                 * whole volume's images (a frame before) go too */
+                brick_trim(st, brick, grow);
+                static const int whole[3] = {I_VALUES, I_NORMALS, I_GMAG};
+                for (int i = 0; i < 3; i++)
+                    if (st->from[whole[i]].made && st->from[whole[i]].data) {
+                        vv_vk_image_free(vk, &st->img[whole[i]]);
+                        st->from[whole[i]].made = 0;
+                    }
+            }
             if (!dry)
                 s = ensure_buffer(st, &st->staging, need, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
             VkDeviceSize *at = dry ? &need : &used;
             for (int k = 0; k < GPU_MAX_CH && s == VV_OK; k++) {
-                s = upload_image(st, I_VALUES + 2 * k, k < nch ? cc[k] : NULL, 0, at, dry);
+                if (k == 0 && brick) {
+                    s = upload_brick(st, brick, cc[0], 0, 1, at, dry, &sent, &grow);
+                    if (s == VV_OK)
+                        s = upload_brick(st, brick, cc[0], 1, cc[0]->nrm != NULL, at, dry, &sent,
+                                         &grow);
+                    continue;
+                }
+                s = upload_image(st, I_VALUES + 2 * k, k < nch ? cc[k] : NULL, 0, at, dry, &sent);
                 if (s == VV_OK)
-                    s = upload_image(st, I_NORMALS + 2 * k, k < nch ? cc[k] : NULL, 1, at, dry);
+                    s = upload_image(st, I_NORMALS + 2 * k, k < nch ? cc[k] : NULL, 1, at, dry,
+                                     &sent);
             }
-            if (s == VV_OK)
-                s = upload_image(st, I_GMAG, lut2d ? c : NULL, 2, at, dry);
+            if (s == VV_OK && brick)
+                s = upload_brick(st, brick, c, 2, lut2d != NULL, at, dry, &sent, &grow);
+            else if (s == VV_OK)
+                s = upload_image(st, I_GMAG, lut2d ? c : NULL, 2, at, dry, &sent);
         }
     }
     if (s == VV_OK) {
@@ -702,7 +924,13 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
         VkDescriptorImageInfo ii[N_IMG];
         int nw = N_BUF;
         for (int i = 0; i < N_IMG; i++) {
-            ii[i] = (VkDescriptorImageInfo){st->sampler, st->img[i].view,
+            /* a cached brick's images stand for channel 0's and the magnitudes */
+            const vv_vk_image *im = !brick           ? &st->img[i]
+                                    : i == I_VALUES  ? &brick->img[0]
+                                    : i == I_NORMALS ? &brick->img[1]
+                                    : i == I_GMAG    ? &brick->img[2]
+                                                     : &st->img[i];
+            ii[i] = (VkDescriptorImageInfo){st->sampler, im->view,
                                             VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
             wr[nw++] =
                 (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
@@ -743,8 +971,17 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                     st->dist_key[k] = cc[k]->key;
                 }
                 copy_back(out, key, st->readback.map, npx, opt ? opt->threads : 0);
-                if (opt && opt->stats)
-                    opt->stats->device_ms += ms;
+                if (opt && opt->stats) {
+                    /* atomic: the multiresolution driver's clones add to one struct */
+                    vv_render_stats *rs = opt->stats;
+                    rs->device_ms += ms;
+                    __atomic_fetch_add(&rs->upload_bytes, (uint64_t)sent, __ATOMIC_RELAXED);
+                    /* a region of named voxels: a hit when the cache held
+                     * them all, else (the cache off too) a miss */
+                    if (rg && rg->from)
+                        __atomic_fetch_add(brick && !grow ? &rs->cache_hits : &rs->cache_misses, 1u,
+                                           __ATOMIC_RELAXED);
+                }
             } else {
                 /* a device that failed a frame is opened afresh next time */
                 release_device(st);
@@ -755,6 +992,10 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
     } else if (vk->dev && s != VV_OK) {
         vk->f.vkEndCommandBuffer(vk->cmd);
     }
+    /* a brick whose copies were recorded but never ran holds nothing */
+    for (int i = 0; s != VV_OK && brick && i < st->n_bricks; i++)
+        if (st->bricks[i] == brick)
+            brick_evict(st, i);
     for (int k = 0; k < nch; k++)
         if (owns[k])
             vv_vtables_free(&tabs[k]);
@@ -863,13 +1104,7 @@ static int
 brick_side(const gpu_state *st, const vv_object *obj) {
     const vv_volume *v = obj->volume;
     const double per_voxel = (vv_voxel_type_size(v->type) <= 2 ? 2 : 4) + 2.0 + 4.0;
-    double budget = st->budget_mb * 1048576.0;
-    if (st->budget_mb < 0) { /* auto: of the device's largest local heap */
-        budget = 0;
-        for (uint32_t h = 0; h < st->vk.mem.memoryHeapCount; h++)
-            if (st->vk.mem.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
-                budget = fmax(budget, 0.75 * (double)st->vk.mem.memoryHeaps[h].size);
-    }
+    const double budget = device_budget(st);
     const uint32_t lim = st->vk.props.limits.maxImageDimension3D;
     int over = 0;
     for (int a = 0; a < 3; a++)
@@ -981,8 +1216,9 @@ gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_valu
 static const char *const gpu_auto[] = {"auto", NULL};
 
 #if VV_HAVE_VULKAN
-/* out of core by bricks and under MPI; channels (up to GPU_MAX_CH, in memory) */
-#define GPU_CAPS (VV_RENDERER_REGION | VV_RENDERER_CHANNELS)
+/* out of core by bricks and under MPI; channels (up to GPU_MAX_CH, in memory);
+ * its regions drawn in turn on its own device (the brick cache) */
+#define GPU_CAPS (VV_RENDERER_REGION | VV_RENDERER_CHANNELS | VV_RENDERER_DEVICE)
 #else
 #define GPU_CAPS 0
 #endif
@@ -998,9 +1234,14 @@ static const vv_option_spec gpu_options[] = {
      VV_OPTION_BIND(gpu_state, early_termination, DOUBLE)},
     {"device_memory_mb", VV_OPTION_REAL, "auto", 0, INFINITY, 0, gpu_auto,
      "MiB of the device's memory a volume may take whole (its values, gradients and gradient "
-     "magnitudes); a larger one is drawn brick by brick, each brick uploaded in turn (auto: "
-     "three quarters of the device's memory; 0: no limit)",
+     "magnitudes); a larger one is drawn brick by brick; and the brick cache's budget: bricks "
+     "drawn (out of core, or of such a volume) stay on the device between frames within it, "
+     "least recently used out (auto: three quarters of the device's memory; 0: no limit)",
      VV_OPTION_BIND_WORDS(gpu_state, budget_mb, DOUBLE, VV_OPTION_WORD_VALUES(-1), NULL)},
+    {"brick_cache", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "keep drawn bricks on the device between frames (0: upload each brick each time it is "
+     "drawn; same image)",
+     VV_OPTION_BIND(gpu_state, brick_cache, INT)},
     {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "leap over subvolumes the transfer function hides (0 for tests; same image)",
      VV_OPTION_BIND(gpu_state, skipping, INT)},
