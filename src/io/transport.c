@@ -131,6 +131,15 @@ io_read_volume(const vv_format_record *r, vv_volume **out, const char *path,
     if (s != VV_OK)
         return s;
     const vv_format_record *named = io_row_named(res.format);
+    if (res.info_len != sizeof(vv_load_info)) {
+        const size_t got = res.info_len;
+        vv_sandbox_result_clear(&res);
+        return vv_error_set(VV_ERR_IO,
+                            "%s: %s: the reader's load info is %zu bytes where this build's is %zu "
+                            "(another build's volvis-reader: set VOLVIS_READER to this build's)",
+                            named ? named->name : "load", vv_path_basename(path), got,
+                            sizeof(vv_load_info));
+    }
     if (!io_info_from_wire(opt->info, res.info, res.info_len) || !res.volume) {
         vv_sandbox_result_clear(&res);
         return vv_error_set(VV_ERR_FORMAT,

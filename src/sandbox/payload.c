@@ -26,7 +26,6 @@
 #include "core/grid_internal.h"
 #include "core/internal.h"
 #include "sandbox/sandbox_internal.h"
-#include "volvis/io.h"
 
 void
 sbx_printable(char *s, size_t cap) {
@@ -683,8 +682,8 @@ sbx_window_bytes(const sbx_store_head *h) {
 
 uint32_t
 sbx_layout(void) {
-    const uint64_t sizes[] = {sizeof(sbx_request), sizeof(sbx_reply),    sizeof(sbx_store_head),
-                              sizeof(sbx_box),     sizeof(vv_load_info), VV_SANDBOX_INFO_MAX};
+    const uint64_t sizes[] = {sizeof(sbx_request), sizeof(sbx_reply), sizeof(sbx_store_head),
+                              sizeof(sbx_box), VV_SANDBOX_INFO_MAX};
     uint32_t h = 2166136261u; /* FNV-1a over the sizes' bytes */
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++)
         for (int b = 0; b < 8; b++) {

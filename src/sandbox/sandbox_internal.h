@@ -230,11 +230,12 @@ uint64_t sbx_window_bytes(const sbx_store_head *h);
 
 /**
  * A fingerprint of the wire's layout (the sizes of the request, the
- * replies, a store's head and box, and vv_load_info, which travels in a
- * reply's info bytes), sent in the hello: a reader of the same protocol
- * version but another build whose structures differ (a stale
- * /usr/local/libexec/volvis-reader found before this build's) is refused
- * by name before any request, not misread.
+ * replies, a store's head and box, the room for info bytes), sent in the
+ * hello: a reader of the same protocol version but another build whose
+ * structures differ (a stale /usr/local/libexec/volvis-reader found before
+ * this build's) is refused by name before any request, not misread. The
+ * info bytes' own layout (io's vv_load_info, a layer above) is checked by
+ * their size where io reads them (transport.c).
  */
 uint32_t sbx_layout(void);
 

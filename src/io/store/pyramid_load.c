@@ -145,23 +145,21 @@ loaded(vv_pyramid *p, py_chunk *e, vv_status s, uint64_t fbytes, int missing) {
     py_unpin(p, e);
 }
 
-/* A loader's window of the queue (read_many; lock held): up to
- * load_window chunks of the first one's level reserved in the cache
- * (PY_LOADING) into @p e, read together without the lock, made ready.
- * Stops the queue as loader_main does when the cache is full. */
-static void
-load_batch(vv_pyramid *p, py_chunk **e, uint64_t *fbytes, int *missing) {
-    const int w = load_window(p);
-    int n = 0, level = -1;
-    while (n < w && p->q_pos < p->q_n) {
+/* The next chunk of the queue that is neither held nor being read, made
+ * an entry being read (PY_LOADING), its position in its level's grid in
+ * @p c; NULL when the queue is done, when its next request is not of
+ * @p level (>= 0: a window reads one level), or when the cache is full
+ * (the rest of the queue then waits for the next request). Lock held. */
+static py_chunk *
+take_queued(vv_pyramid *p, int level, int c[3]) {
+    while (p->q_pos < p->q_n) {
         const py_req q = p->queue[p->q_pos];
         if (level >= 0 && q.level != level)
-            break;
+            return NULL;
         p->q_pos++;
         const py_level *l = &p->lv[q.level];
         if (py_find_chunk(p, q.level, q.L))
             continue; /* held, or being read */
-        int c[3];
         c[0] = (int)(q.L % (uint64_t)l->nchunks[0]);
         c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
         c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
@@ -176,12 +174,27 @@ load_batch(vv_pyramid *p, py_chunk **e, uint64_t *fbytes, int *missing) {
             p->q_pos = p->q_n; /* full: the rest waits for the next request */
             p->stalled = 1;
             pthread_cond_broadcast(&p->arrived);
-            break;
+            return NULL;
         }
         x->state = PY_LOADING;
         x->ce.want = p->cl.want;
         py_insert_entry(p, x);
-        level = q.level;
+        return x;
+    }
+    return NULL;
+}
+
+/* A loader's window of the queue (read_many; lock held): up to
+ * load_window chunks of the first one's level reserved in the cache
+ * (PY_LOADING) into @p e, read together without the lock, made ready.
+ * Stops the queue as loader_main does when the cache is full. */
+static void
+load_batch(vv_pyramid *p, py_chunk **e, uint64_t *fbytes, int *missing) {
+    const int w = load_window(p);
+    int n = 0, level = -1, c[3];
+    py_chunk *x;
+    while (n < w && (x = take_queued(p, level, c)) != NULL) {
+        level = x->level;
         e[n++] = x;
     }
     if (n == 0)
@@ -218,30 +231,10 @@ loader_main(void *arg) {
             pthread_cond_wait(&p->work, p->lock);
             continue;
         }
-        const py_req q = p->queue[p->q_pos++];
-        const py_level *l = &p->lv[q.level];
-        if (py_find_chunk(p, q.level, q.L))
-            continue; /* held, or being read */
         int c[3];
-        c[0] = (int)(q.L % (uint64_t)l->nchunks[0]);
-        c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
-        c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
-        py_chunk *e = py_new_entry(p, q.level, c);
-        if (!e || !vv_cache_make_room(p->cache, e->bytes, 1) ||
-            vv_volume_new(&e->blk, e->n, l->type) != VV_OK) {
-            if (e)
-                vv_volume_free(e->blk);
-            free(e);
-            vv_error_clear();
-            p->st.load_stopped += (uint64_t)(p->q_n - p->q_pos + 1);
-            p->q_pos = p->q_n; /* full: the rest waits for the next request */
-            p->stalled = 1;
-            pthread_cond_broadcast(&p->arrived);
-            continue;
-        }
-        e->state = PY_LOADING;
-        e->ce.want = p->cl.want;
-        py_insert_entry(p, e);
+        py_chunk *e = take_queued(p, -1, c);
+        if (!e)
+            continue; /* the queue done, or the cache full */
         p->in_flight++;
         pthread_mutex_unlock(p->lock);
         int missing = 0;
