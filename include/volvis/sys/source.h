@@ -225,7 +225,9 @@ typedef struct vv_store {
     /**
      * Optional (NULL): @p n chunks of @p level at once, chunk i (indices
      * c[3i .. 3i + 2]) into dst[i] (box org[3i ..], dims[3i ..]) with
-     * missing[i] and file_bytes[i] as read_chunk gives them, decoded on
+     * missing[i] and file_bytes[i] as read_chunk gives them and its voxels'
+     * range (fill values included) in range[2i] (least) and range[2i + 1]
+     * (greatest), taken as the voxels are copied in, decoded on
      * @p nthreads threads (the caller's among them) while the store fetches
      * the next ones; asked in the order given (the pyramid's: a frame's
      * plan, coarse levels first, then front to back). A remote store puts
@@ -233,7 +235,7 @@ typedef struct vv_store {
      */
     vv_status (*read_many)(void *ctx, int level, int n, const int *c, unsigned char *const *dst,
                            const int *org, const int *dims, int nthreads, int *missing,
-                           uint64_t *file_bytes);
+                           uint64_t *file_bytes, double *range);
 } vv_store;
 
 /**

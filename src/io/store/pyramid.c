@@ -179,9 +179,11 @@ py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file
         return VV_OK;
     int *c = calloc(9 * (size_t)n, sizeof(int));
     unsigned char **dst = calloc((size_t)n, sizeof *dst);
-    if (!c || !dst) {
+    double *range = calloc(2 * (size_t)n, sizeof *range);
+    if (!c || !dst || !range) {
         free(c);
         free(dst);
+        free(range);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for %d chunks", n);
     }
     int *org = c + 3 * n, *dims = c + 6 * n;
@@ -194,12 +196,13 @@ py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file
         }
         dst[i] = todo[i]->blk->data;
     }
-    const vv_status s =
-        st->read_many(st->ctx, todo[0]->level, n, c, dst, org, dims, nthreads, missing, file_bytes);
-    for (int i = 0; s == VV_OK && i < n; i++)
-        vv_volume_update_range(todo[i]->blk);
+    const vv_status s = st->read_many(st->ctx, todo[0]->level, n, c, dst, org, dims, nthreads,
+                                      missing, file_bytes, range);
+    for (int i = 0; s == VV_OK && i < n; i++) /* taken as the store copied them in */
+        vv_volume_set_range(todo[i]->blk, range + 2 * i);
     free(c);
     free(dst);
+    free(range);
     return s;
 }
 
@@ -224,6 +227,13 @@ read_many(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *miss
 static vv_status
 decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
     const vv_store *st = &p->store;
+    int one_level = 1;
+    for (int i = 1; i < n; i++)
+        one_level &= todo[i]->level == todo[0]->level;
+    if (st->read_many && n > 1 && one_level)
+        /* the store fetches them together (a remote one: many requests in
+         * flight) while the cores decode */
+        return read_many(p, todo, n, file_bytes, missing);
     dc_job j = {.p = p,
                 .todo = todo,
                 .n = n,
@@ -234,15 +244,6 @@ decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *
     atomic_init(&j.next, 0);
     pthread_mutex_init(&j.lock, NULL);
     const int big = st->scratch > ((size_t)64 << 20);
-    int one_level = 1;
-    for (int i = 1; i < n; i++)
-        one_level &= todo[i]->level == todo[0]->level;
-    if (st->read_many && n > 1 && one_level) {
-        /* the store fetches them together (a remote one: many requests in
-         * flight) while the cores decode */
-        pthread_mutex_destroy(&j.lock);
-        return read_many(p, todo, n, file_bytes, missing);
-    }
     if (st->parallel > 1 && !big && n > 1) {
         int want = st->parallel < n ? st->parallel : n;
         /* each thread holds a chunk's scratch: at most a quarter of the budget */

@@ -168,12 +168,14 @@ typedef struct zr_dest {
     int org[3], dims[3];
     int missing;
     uint64_t file_bytes;
+    double range[2]; /* the voxel range of what was copied into dst, widened */
 } zr_dest;
 
 /* The spatial chunks @p L[0 .. n) (NULL: 0 .. n - 1, in that order) of
  * @p J's array copied as vv_zr_copy_chunk does: all into @p dst (dorg,
  * ddims alike), or, @p each not NULL, chunk i into each[i] (dst, dorg,
- * ddims unused); @p range (may be NULL) widened. Decoded on @p nthreads
+ * ddims and @p range unused: each[i].range is widened as it is copied);
+ * else @p range (may be NULL) widened. Decoded on @p nthreads
  * threads (each a buffer of J->cbytes; the caller's the first). A store
  * read over the network (a URL) has its reads batched: the shard indexes
  * first (each once), then the chunks' byte ranges (those that follow

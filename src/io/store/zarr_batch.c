@@ -221,7 +221,7 @@ decode_one(zb_job *j, uint64_t p, const bs_get *g, const unsigned char *src, siz
     if (s == VV_OK && d) {
         d->missing = missing;
         d->file_bytes = missing ? 0 : m;
-        vv_zr_place_unit(J, x, buf, missing, d->dst, d->org, d->dims, range);
+        vv_zr_place_unit(J, x, buf, missing, d->dst, d->org, d->dims, d->range);
     } else if (s == VV_OK)
         vv_zr_place_unit(J, x, buf, missing, j->dst, j->dorg, j->ddims, range);
     else {
@@ -315,7 +315,7 @@ copy_each(const zr_layout *J, const uint64_t *L, uint64_t n, unsigned char *dst,
             vv_status cs = !buf ? vv_error_set(VV_ERR_NOMEM,
                                                "out of memory for a chunk of %zu bytes", J->cbytes)
                            : d  ? vv_zr_copy_chunk(J, c, buf, d->dst, d->org, d->dims, &d->missing,
-                                                   &d->file_bytes, range ? mine : NULL)
+                                                   &d->file_bytes, d->range)
                                 : vv_zr_copy_chunk(J, c, buf, dst, dorg, ddims, NULL, NULL,
                                                   range ? mine : NULL);
             if (cs != VV_OK) {

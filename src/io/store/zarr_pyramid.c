@@ -5,6 +5,7 @@
  * pyramid decodes a box's chunks on every core, a scratch buffer of the
  * largest chunk each). The level's chunk box is the store's own.
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,7 +37,7 @@ zp_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsi
 /* A remote store's chunks of one level in batches (vv_zr_copy_chunks). */
 static vv_status
 zp_read_many(void *ctx, int level, int n, const int *c, unsigned char *const *dst, const int *org,
-             const int *dims, int nthreads, int *missing, uint64_t *file_bytes) {
+             const int *dims, int nthreads, int *missing, uint64_t *file_bytes, double *range) {
     const zp_level *l = &((const zp_store *)ctx)->lv[level];
     uint64_t *L = calloc((size_t)(n > 0 ? n : 1), sizeof *L);
     zr_dest *d = calloc((size_t)(n > 0 ? n : 1), sizeof *d);
@@ -46,12 +47,16 @@ zp_read_many(void *ctx, int level, int n, const int *c, unsigned char *const *ds
         d[i].dst = dst[i];
         memcpy(d[i].org, org + 3 * i, sizeof d[i].org);
         memcpy(d[i].dims, dims + 3 * i, sizeof d[i].dims);
+        d[i].range[0] = INFINITY;
+        d[i].range[1] = -INFINITY;
     }
     if (s == VV_OK)
         s = vv_zr_copy_chunks(&l->J, L, (uint64_t)n, NULL, NULL, NULL, d, nthreads, NULL);
     for (int i = 0; s == VV_OK && i < n; i++) {
         missing[i] = d[i].missing;
         file_bytes[i] = d[i].file_bytes;
+        range[2 * i] = d[i].range[0];
+        range[2 * i + 1] = d[i].range[1];
     }
     free(L);
     free(d);
