@@ -6,8 +6,9 @@
  * can change the bytes once the parent has them. The parent's side: every
  * decoder checks what it was given -- sizes against the memfd, the seals,
  * a finite geometry, every index and offset -- before it believes it; a
- * volume is mapped privately (no copy), meshes, grids and listings are
- * copied first. Nothing a reader sends is trusted (fuzzed by
+ * volume is mapped privately (no copy), or, asked with peek, copied out of
+ * the reader's memory (process_vm_readv) with no memfd at all; meshes,
+ * grids and listings are copied first. Nothing a reader sends is trusted (fuzzed by
  * tests/fuzz/fuzz_sandbox.c through sbx_take_message).
  */
 #define _GNU_SOURCE
@@ -15,12 +16,14 @@
 #include <fcntl.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include "core/grid_internal.h"
@@ -280,6 +283,24 @@ finite_all(const double *x, int n) {
     return 1;
 }
 
+/* The reply's geometry and provenance into @p v (enumerations out of range
+ * taken as unknown; the geometry was checked finite). */
+static void
+take_geometry(vv_volume *v, const sbx_reply *r) {
+    memcpy(v->spacing, r->spacing, sizeof v->spacing);
+    memcpy(v->origin, r->origin, sizeof v->origin);
+    memcpy(v->direction, r->direction, sizeof v->direction);
+    v->unit = r->unit >= 0 && r->unit <= VV_UNIT_UNKNOWN ? (vv_unit)r->unit : VV_UNIT_UNKNOWN;
+    v->data_origin = r->data_origin >= 0 && r->data_origin <= VV_ORIGIN_OTHER
+                         ? (vv_data_origin)r->data_origin
+                         : VV_ORIGIN_OTHER;
+    v->modification = r->modification >= 0 && r->modification <= VV_MOD_OTHER
+                          ? (vv_modification)r->modification
+                          : VV_MOD_OTHER;
+    v->space = r->space == VV_SPACE_RAS || r->space == VV_SPACE_LPS ? (vv_space)r->space
+                                                                    : VV_SPACE_UNKNOWN;
+}
+
 /* The volume of a result reply and its memfd: sizes against the memfd,
  * its seals, a finite geometry. Owns @p fd. */
 vv_status
@@ -335,18 +356,87 @@ sbx_volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *f
         return s;
     }
     vv_volume_set_range(v, range);
-    memcpy(v->spacing, r->spacing, sizeof v->spacing);
-    memcpy(v->origin, r->origin, sizeof v->origin);
-    memcpy(v->direction, r->direction, sizeof v->direction);
-    v->unit = r->unit >= 0 && r->unit <= VV_UNIT_UNKNOWN ? (vv_unit)r->unit : VV_UNIT_UNKNOWN;
-    v->data_origin = r->data_origin >= 0 && r->data_origin <= VV_ORIGIN_OTHER
-                         ? (vv_data_origin)r->data_origin
-                         : VV_ORIGIN_OTHER;
-    v->modification = r->modification >= 0 && r->modification <= VV_MOD_OTHER
-                          ? (vv_modification)r->modification
-                          : VV_MOD_OTHER;
-    v->space = r->space == VV_SPACE_RAS || r->space == VV_SPACE_LPS ? (vv_space)r->space
-                                                                    : VV_SPACE_UNKNOWN;
+    take_geometry(v, r);
+    *out = v;
+    return VV_OK;
+}
+
+/* Copies [r->addr, r->addr + bytes) of reader @p peer into @p dst in 4 MiB
+ * pieces on the library's threads, each piece's voxels measured into
+ * @p range as it lands (in this core's cache). 0, or the errno of the
+ * first piece that could not be read whole. */
+static int
+copy_from_peer(unsigned char *dst, uint64_t addr, size_t bytes, pid_t peer, vv_voxel_type type,
+               double range[2]) {
+    const size_t piece = (size_t)4 << 20, es = vv_voxel_type_size(type);
+    const int64_t n = (int64_t)((bytes + piece - 1) / piece);
+    _Atomic int failed = 0;
+    range[0] = INFINITY;
+    range[1] = -INFINITY;
+#pragma omp parallel if (n > 1)
+    {
+        double mine[2] = {INFINITY, -INFINITY};
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < n; i++) {
+            const size_t off = (size_t)i * piece, len = bytes - off < piece ? bytes - off : piece;
+            size_t got = 0;
+            while (got < len && !atomic_load(&failed)) {
+                struct iovec here = {dst + off + got, len - got};
+                struct iovec there = {(void *)(uintptr_t)(addr + off + got), len - got};
+                const ssize_t k = process_vm_readv(peer, &here, 1, &there, 1, 0);
+                if (k < 0 && errno == EINTR)
+                    continue;
+                if (k <= 0) {
+                    int none = 0, e = k < 0 ? errno : EFAULT;
+                    atomic_compare_exchange_strong(&failed, &none, e ? e : EFAULT);
+                    break;
+                }
+                got += (size_t)k;
+            }
+            if (got == len)
+                vv_range_accumulate(type, dst + off, len / es, mine);
+        }
+#pragma omp critical(sbx_volume_range)
+        {
+            range[0] = mine[0] < range[0] ? mine[0] : range[0];
+            range[1] = mine[1] > range[1] ? mine[1] : range[1];
+        }
+    }
+    return atomic_load(&failed);
+}
+
+vv_status
+sbx_volume_from_peer(vv_volume **out, const sbx_reply *r, pid_t peer, const char *fmt_name,
+                     const char *file) {
+    uint64_t bytes = 0;
+    vv_status s = VV_OK;
+    if (peer <= 0 || !r->addr || r->type < VV_U8 || r->type > VV_F64)
+        return vv_error_set(VV_ERR_FORMAT, "%s: %s: the reader's result has no voxels", fmt_name,
+                            file);
+    if ((s = vv_volume_check_size(r->dims, (vv_voxel_type)r->type, &bytes)) != VV_OK)
+        return vv_error_prefix(s, "%s: %s: the reader's result", fmt_name, file);
+    if (bytes == 0 || bytes != r->bytes || r->addr > UINTPTR_MAX - bytes)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: %s: the reader's result does not hold the %llu bytes it names",
+                            fmt_name, file, (unsigned long long)bytes);
+    if (!finite_all(r->spacing, 3) || !finite_all(r->origin, 3) || !finite_all(r->direction, 9) ||
+        !(r->spacing[0] > 0) || !(r->spacing[1] > 0) || !(r->spacing[2] > 0))
+        return vv_error_set(VV_ERR_FORMAT, "%s: %s: the reader's result has a broken geometry",
+                            fmt_name, file);
+    vv_volume *v = NULL;
+    if ((s = vv_volume_new(&v, r->dims, (vv_voxel_type)r->type)) != VV_OK)
+        return s;
+    double range[2];
+    const int e = copy_from_peer(v->data, r->addr, (size_t)bytes, peer, v->type, range);
+    if (e) {
+        vv_volume_free(v);
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: %s: cannot copy the reader's %llu bytes of voxels: %s; the file "
+                            "is hostile or the reader broken",
+                            fmt_name, file, (unsigned long long)bytes, strerror(e));
+    }
+    vv_volume_set_range(v, range);
+    take_geometry(v, r);
     *out = v;
     return VV_OK;
 }
@@ -605,6 +695,13 @@ sbx_grid_from_reply(vv_grid **out, const sbx_reply *r, int fd, const char *fmt_n
 int
 sbx_take_message(int op, const void *msg, size_t len, int fd, char name[VV_SANDBOX_NAME_MAX],
                  char title[64], const char *file, vv_sandbox_result *out, vv_status *status) {
+    return sbx_take_message_peer(op, msg, len, fd, 0, name, title, file, out, status);
+}
+
+int
+sbx_take_message_peer(int op, const void *msg, size_t len, int fd, pid_t peer,
+                      char name[VV_SANDBOX_NAME_MAX], char title[64], const char *file,
+                      vv_sandbox_result *out, vv_status *status) {
     memset(out, 0, sizeof *out);
     sbx_reply *r = malloc(sizeof *r);
     if (!r) {
@@ -651,6 +748,8 @@ sbx_take_message(int op, const void *msg, size_t len, int fd, char name[VV_SANDB
         *status = sbx_mesh_from_reply(&out->mesh, r, fd, name, file);
     } else if (op == VV_SANDBOX_GRID) {
         *status = sbx_grid_from_reply(&out->grid, r, fd, name, file);
+    } else if (fd < 0 && peer > 0 && r->addr) { /* asked with peek: copied out of the reader */
+        *status = sbx_volume_from_peer(&out->volume, r, peer, name, file);
     } else {
         *status = sbx_volume_from_reply(&out->volume, r, fd, name, file);
     }

@@ -353,9 +353,12 @@ sbx_address_limit(uint64_t budget, int threads) {
 
 /* The limits of the reader: no core file; CPU seconds; address space from
  * the memory budget (not under a sanitizer, whose shadow memory is
- * terabytes of address space). */
+ * terabytes of address space); not dumpable, unless @p peek: its parent
+ * then copies the voxels out of it (process_vm_readv, which the kernel
+ * refuses for a process that is not dumpable unless the caller may
+ * ptrace anything); a core file is still never written. */
 void
-sbx_set_limits(uint64_t budget, int threads, unsigned cpu_seconds) {
+sbx_set_limits(uint64_t budget, int threads, unsigned cpu_seconds, int peek) {
     struct rlimit no_core = {0, 0};
     setrlimit(RLIMIT_CORE, &no_core);
     struct rlimit cpu = {cpu_seconds, (rlim_t)cpu_seconds + 5};
@@ -386,5 +389,6 @@ sbx_set_limits(uint64_t budget, int threads, unsigned cpu_seconds) {
     (void)budget;
     (void)threads;
 #endif
-    prctl(PR_SET_DUMPABLE, 0, 0, 0, 0);
+    if (!peek)
+        prctl(PR_SET_DUMPABLE, 0, 0, 0, 0);
 }

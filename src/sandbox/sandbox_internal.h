@@ -9,7 +9,11 @@
  * the parent sends one sbx_request; the reader answers with an sbx_reply
  * of kind SBX_FORMAT once it knows the row it reads with (so that a crash
  * can be named after its reader) and one of kind SBX_RESULT, which carries
- * the memfd of its result (SCM_RIGHTS) when the read succeeded. A store's
+ * the memfd of its result (SCM_RIGHTS) when the read succeeded. A volume
+ * asked with peek (the parent found it may read the reader's memory) comes
+ * without a memfd: the reply names where the voxels lie in the reader, the
+ * parent copies them out (process_vm_readv) and only then stops the
+ * reader, which waits for it. A store's
  * reader then answers one sbx_box after another. The parent trusts
  * nothing in a reply: sizes are checked against the memfd, the memfd must
  * be sealed, geometry must be finite, and the value range is computed
@@ -76,6 +80,7 @@ typedef struct sbx_request {
     uint64_t budget; /* the memory budget (vv_memory_budget_set) */
     int32_t threads;
     int32_t inject;
+    int32_t peek;         /* a volume: keep the voxels in the reader's memory (sbx_reply.addr) */
     uint32_t cpu_seconds; /* 0: a long-lived reader, timed request by request */
     uint32_t args_len;
     unsigned char args[VV_SANDBOX_ARGS_MAX];
@@ -112,6 +117,7 @@ typedef struct sbx_reply {
     uint32_t info_len;
     unsigned char info[VV_SANDBOX_INFO_MAX];
     uint64_t bytes;
+    uint64_t addr; /* a volume asked with peek: where its voxels are in the reader (no memfd) */
     uint64_t n_vertices, n_triangles; /* a mesh: positions then triangles */
     uint64_t file_bytes;              /* a store's chunk: bytes read from storage */
     int32_t missing;                  /* a store's chunk: absent, the fill value */
@@ -172,8 +178,9 @@ void sbx_printable(char *s, size_t cap);
 
 /* ---- policy.c (the reader) ---- */
 
-/** No core file; CPU seconds; address space from the budget (not under a sanitizer). */
-void sbx_set_limits(uint64_t budget, int threads, unsigned cpu_seconds);
+/** No core file; CPU seconds; address space from the budget (not under a sanitizer); not
+ *  dumpable unless @p peek (the parent then copies the voxels out of this process). */
+void sbx_set_limits(uint64_t budget, int threads, unsigned cpu_seconds, int peek);
 /** Read access beneath the folder of @p path only; 0, or -1 with errno. */
 int sbx_landlock_restrict(const char *path);
 /** The reader's system-call filter; 0 or -1. */
@@ -206,6 +213,10 @@ int sbx_grid_memfd(const vv_grid *g, uint64_t *bytes);
  * populates the mapping (no range a reader sends is trusted). */
 vv_status sbx_volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *name,
                                 const char *file);
+/** The volume of a peek reply: r->bytes copied out of reader @p peer at r->addr (see
+ *  sbx_take_message_peer). */
+vv_status sbx_volume_from_peer(vv_volume **out, const sbx_reply *r, pid_t peer, const char *name,
+                               const char *file);
 vv_status sbx_mesh_from_reply(vv_mesh **out, const sbx_reply *r, int fd, const char *name,
                               const char *file);
 vv_status sbx_grid_from_reply(vv_grid **out, const sbx_reply *r, int fd, const char *name,
@@ -219,10 +230,31 @@ vv_status sbx_blob_from_reply(void **out, size_t *len, const sbx_reply *r, int f
  * (owned). Returns 0 when more is to come (a format message: @p name and
  * @p title take the row it names, when printable), 1 for the result (*@p out
  * filled; *@p status its status, set with vv_error_set), -1 when malformed.
- * Fuzzed by tests/fuzz/fuzz_sandbox.c.
+ * Fuzzed by tests/fuzz/fuzz_sandbox.c. A volume reply that names an
+ * address instead of carrying a memfd is refused ("no voxels").
  */
 int sbx_take_message(int op, const void *msg, size_t len, int fd, char name[VV_SANDBOX_NAME_MAX],
                      char title[64], const char *file, vv_sandbox_result *out, vv_status *status);
+/**
+ * sbx_take_message for a request sent with peek to reader @p peer (> 0; 0:
+ * none): a volume reply may then name an address (sbx_reply.addr, no
+ * memfd), whose r->bytes the parent copies out of @p peer's memory into a
+ * volume of its own (process_vm_readv, 4 MiB pieces on the library's
+ * threads, the range measured on the copy as each piece lands: nothing the
+ * reader changes afterwards reaches it). Errors: an address the copy
+ * cannot read whole, VV_ERR_FORMAT; no memory for the volume, VV_ERR_NOMEM.
+ */
+int sbx_take_message_peer(int op, const void *msg, size_t len, int fd, pid_t peer,
+                          char name[VV_SANDBOX_NAME_MAX], char title[64], const char *file,
+                          vv_sandbox_result *out, vv_status *status);
+/**
+ * 1 when this process may copy memory out of reader @p pid
+ * (process_vm_readv: the kernel's ptrace access check, a reader still
+ * dumpable), 0 when not (Yama, another user, no such call): asked once a
+ * process with a one-byte read at an unmapped address, which fails with
+ * EFAULT only once access is granted. VOLVIS_SANDBOX_PEEK=0 forces 0.
+ */
+int sbx_can_peek(pid_t pid);
 
 /** The bytes of a store's window (payload.c): its table, or its largest
  *  chunk; 0 when a chunk is over SBX_MAX_BOX_BYTES. */

@@ -3,8 +3,9 @@
  * vv_sandbox_serve): what volvis-reader runs. It says hello, takes the
  * parent's request from descriptor 3, locks itself down (policy.c), runs
  * the program's handler for the request -- which calls the format row's
- * read directly -- and sends the result in a sealed memfd (payload.c) or
- * the error trace as text, then ends; a store's reader serves chunks
+ * read directly -- and sends the result in a sealed memfd (payload.c), or
+ * a volume's address for the parent to copy from (peek), or the error
+ * trace as text, then ends; a store's reader serves chunks
  * until the parent closes its end. A test may ask it to misbehave after
  * the lockdown, as a hostile parser would (VOLVIS_SANDBOX_INJECT, carried
  * in the request).
@@ -35,6 +36,7 @@ const char *const sbx_inject_names[SBX_N_INJECT] = {"",      "abort",  "segv",  
 struct vv_sandbox_server {
     const sbx_request *rq;
     int inject;
+    int peek; /* a volume left in this process's memory for the parent to copy */
     int announced;
     char name[VV_SANDBOX_NAME_MAX], title[64];
 };
@@ -170,6 +172,13 @@ finish(vv_sandbox_server *srv, sbx_reply *r, vv_status s, int fd) {
     if (mine != MAP_FAILED)
         for (unsigned char v = 0;; v++) /* the parent must stop it first */
             memset(mine, v, (size_t)r->bytes);
+    /* voxels the parent copies out of this process: alive until it has
+     * (it closes its end, or stops this process) */
+    for (char c; srv->peek && s == VV_OK;) {
+        const ssize_t k = recv(SBX_FD, &c, 1, 0);
+        if (k == 0 || (k < 0 && errno != EINTR))
+            break;
+    }
     _exit(0);
 }
 
@@ -316,8 +325,10 @@ serve_one(vv_sandbox_server *srv, const vv_sandbox_handler *h, sbx_reply *r) {
             r->modification = v->modification;
             r->space = v->space;
             r->bytes = vv_volume_voxel_count(v) * vv_voxel_type_size(v->type);
-            if ((fd = sbx_sealed(sbx_memfd_of(v->data, (size_t)r->bytes),
-                                 srv->inject == INJECT_SCRIBBLE)) < 0)
+            if (srv->peek) /* the parent copies them from here */
+                r->addr = (uint64_t)(uintptr_t)v->data;
+            else if ((fd = sbx_sealed(sbx_memfd_of(v->data, (size_t)r->bytes),
+                                      srv->inject == INJECT_SCRIBBLE)) < 0)
                 s = vv_error_set(VV_ERR_NOMEM,
                                  "the reader could not hand over %llu bytes of voxels",
                                  (unsigned long long)r->bytes);
@@ -386,13 +397,14 @@ vv_sandbox_serve(int argc, char **argv, const vv_sandbox_handler *h) {
     memset(&srv, 0, sizeof srv);
     srv.rq = &rq;
     srv.inject = rq.inject > INJECT_NONE && rq.inject < SBX_N_INJECT ? rq.inject : INJECT_NONE;
+    srv.peek = rq.peek == 1 && rq.op == VV_SANDBOX_VOLUME;
     static sbx_reply r;
     r.magic = SBX_MAGIC;
     r.kind = SBX_RESULT;
 
     vv_memory_budget_set(rq.budget);
     vv_threads_set(rq.threads);
-    sbx_set_limits(rq.budget, rq.threads, rq.cpu_seconds);
+    sbx_set_limits(rq.budget, rq.threads, rq.cpu_seconds, srv.peek);
     sbx_profile_before_lockdown();
     if (prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 ||
         (sbx_landlock_restrict(rq.path) != 0 && errno != ENOSYS && errno != EOPNOTSUPP) ||
@@ -403,8 +415,12 @@ vv_sandbox_serve(int argc, char **argv, const vv_sandbox_handler *h) {
                             strerror(e)),
                -1);
     }
-    /* from here on, what the file makes the parser do stays in here */
-    vv_volume_set_allocator(sbx_memfd_alloc, sbx_memfd_release);
+    /* from here on, what the file makes the parser do stays in here;
+     * voxels are made in memfds to be handed over, or, when the parent
+     * copies them out (peek), in ordinary memory (huge pages, no memfd's
+     * page-by-page shared memory) */
+    if (!srv.peek)
+        vv_volume_set_allocator(sbx_memfd_alloc, sbx_memfd_release);
     if (rq.op == VV_SANDBOX_STORE)
         serve_store(&srv, h, &r);
     serve_one(&srv, h, &r);

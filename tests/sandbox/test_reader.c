@@ -75,12 +75,7 @@ load(vv_volume **v, const char *path, int sandbox) {
 }
 
 static void
-assert_same(const char *path) {
-    vv_volume *a = NULL, *b = NULL;
-    vt_ok(load(&a, path, 0));
-    vt_ok(load(&b, path, 1));
-    assert_null(a->release);     /* in-process: the library's own memory */
-    assert_non_null(b->release); /* sandbox: the child's memfd, mapped */
+assert_same_as(const vv_volume *a, vv_volume *b) {
     assert_memory_equal(a->dims, b->dims, sizeof a->dims);
     assert_int_equal(a->type, b->type);
     assert_memory_equal(a->spacing, b->spacing, sizeof a->spacing);
@@ -90,11 +85,32 @@ assert_same(const char *path) {
     assert_int_equal(a->unit, b->unit);
     assert_int_equal(a->space, b->space);
     assert_memory_equal(a->data, b->data, vv_volume_voxel_count(a) * vv_voxel_type_size(a->type));
-    /* the mapping is writable, as a volume's voxels are */
+    /* writable, as a volume's voxels are (a private mapping, or a copy) */
     vv_volume_set(b, 0, 0, 0, 7);
     assert_near(vv_volume_get(b, 0, 0, 0), 7, 0);
+}
+
+/* @p path read in-process, in the reader with its voxels copied out of it
+ * (peek, where this process may: always as root, which may ptrace any
+ * process), and in the reader with its voxels handed over in a memfd
+ * (VOLVIS_SANDBOX_PEEK=0): the same volume three times. */
+static void
+assert_same(const char *path) {
+    vv_volume *a = NULL, *b = NULL, *c = NULL;
+    vt_ok(load(&a, path, 0));
+    vt_ok(load(&b, path, 1));
+    setenv("VOLVIS_SANDBOX_PEEK", "0", 1);
+    vt_ok(load(&c, path, 1));
+    unsetenv("VOLVIS_SANDBOX_PEEK");
+    assert_null(a->release); /* in-process: the library's own memory */
+    if (geteuid() == 0)
+        assert_null(b->release); /* copied out of the reader into ours */
+    assert_non_null(c->release); /* the child's memfd, mapped */
+    assert_same_as(a, b);
+    assert_same_as(a, c);
     vv_volume_free(a);
     vv_volume_free(b);
+    vv_volume_free(c);
     assert_no_child();
 }
 
@@ -111,7 +127,8 @@ test_same_volume(void **state) {
     vt_ok(vv_volume_save(v, vt_path(g_dir, "head.tif"), VV_FORMAT_TIFF, 1));
     vt_ok(vv_volume_save(v, vt_path(g_dir, "head.nii"), VV_FORMAT_NIFTI, 1));
     /* and an OME-Zarr, whose reader leaves the range to the parent (two
-     * 8 MiB pieces of the parent's populate-and-range pass) */
+     * 8 MiB pieces of the parent's populate-and-range pass, four 4 MiB
+     * pieces of its copy) */
     vt_ok(vv_volume_save(v, vt_path(g_dir, "head.ome.zarr"), VV_FORMAT_OME_ZARR, 1));
     vv_volume_free(v);
     assert_same(vt_path(g_dir, "head.tif"));
@@ -145,7 +162,9 @@ test_own_parsers_in_reader(void **state) {
         setenv("VOLVIS_SANDBOX", "1", 1);
         vt_ok(vv_volume_load(&a, paths[i], NULL));
         setenv("VOLVIS_SANDBOX", "all", 1);
+        setenv("VOLVIS_SANDBOX_PEEK", "0", 1); /* a memfd: the mark of the reader */
         vt_ok(vv_volume_load(&b, paths[i], NULL));
+        unsetenv("VOLVIS_SANDBOX_PEEK");
         unsetenv("VOLVIS_SANDBOX");
         assert_null(a->release);     /* ours, in this process */
         assert_non_null(b->release); /* the reader's memfd */
@@ -700,6 +719,43 @@ test_hostile_replies(void **state) {
             "voxels are not sealed against writing");
     hostile("memfd too small", &r, len, all / 2, sealed, 1, "does not hold the 128 bytes");
     hostile("no memfd", &r, len, 0, 0, 1, "has no voxels");
+
+    /* a reply asked with peek names where its voxels are (here: this
+     * process's, copied with process_vm_readv as a reader's are) */
+    r = ok;
+    r.addr = (uint64_t)(uintptr_t)g_vox;
+    assert_int_equal(sbx_take_message_peer(VV_SANDBOX_VOLUME, &r, len, -1, getpid(), name, title,
+                                           "a.nrrd", &a, &s),
+                     1);
+    vt_ok(s);
+    v = a.volume;
+    assert_non_null(v);
+    assert_null(v->release); /* our own copy */
+    assert_memory_equal(v->data, g_vox, all);
+    assert_true(v->range[0] == 1000 && v->range[1] == 1063);
+    assert_true(v->spacing[1] == 0.5);
+    vv_volume_free(v);
+    /* an address not mapped there, one whose bytes would wrap around, and
+     * an address where no peek was asked: errors, never a volume */
+    const struct {
+        uint64_t addr;
+        pid_t peer;
+        const char *expect;
+    } peeks[] = {{1, getpid(), "cannot copy the reader's 128 bytes of voxels"},
+                 {UINT64_MAX - 8, getpid(), "does not hold the 128 bytes"},
+                 {(uint64_t)(uintptr_t)g_vox, 0, "has no voxels"}};
+    for (size_t i = 0; i < sizeof peeks / sizeof peeks[0]; i++) {
+        r.addr = peeks[i].addr;
+        vv_error_clear();
+        assert_int_equal(sbx_take_message_peer(VV_SANDBOX_VOLUME, &r, len, -1, peeks[i].peer, name,
+                                               title, "a.nrrd", &a, &s),
+                         1);
+        assert_null(a.volume);
+        assert_true(s < 0);
+        if (!strstr(vv_error_message(), peeks[i].expect))
+            fail_msg("peek %zu: \"%s\" does not say \"%s\"", i, vv_error_message(),
+                     peeks[i].expect);
+    }
     r.bytes = 64;
     hostile("byte count wrong", &r, len, all, sealed, 1, "does not hold");
     r = ok;

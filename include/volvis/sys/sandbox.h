@@ -44,7 +44,7 @@ extern "C" {
 #endif
 
 /** The protocol between the library and its reader (a reader of another one is refused). */
-#define VV_SANDBOX_PROTOCOL 7
+#define VV_SANDBOX_PROTOCOL 8
 
 /** What a reader is asked for. */
 typedef enum vv_sandbox_op {
