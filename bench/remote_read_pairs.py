@@ -23,8 +23,6 @@ anchor lines and the ratio zarr-python / VolVis (above 1: VolVis is faster).
 import argparse
 import os
 import re
-import shutil
-import socket
 import statistics
 import subprocess
 import sys
@@ -33,52 +31,11 @@ import time
 import numpy as np
 import zarr
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "tests", "io"))
+from http_common import start_nginx, stop_nginx  # noqa: E402
 from zarr_read_pairs import make_store  # noqa: E402
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def start_nginx(root, out):
-    nginx = shutil.which("nginx") or "/usr/sbin/nginx"
-    if not os.path.exists(nginx):
-        sys.exit("remote_read_pairs: nginx is missing (apt-get install nginx-light)")
-    port = free_port()
-    conf = os.path.join(out, "nginx.conf")
-    with open(conf, "w") as f:
-        f.write(f"""daemon off;
-master_process off;
-worker_processes 1;
-pid {out}/nginx.pid;
-error_log {out}/error.log;
-events {{ worker_connections 1024; }}
-http {{
-  access_log off;
-  client_body_temp_path {out}/tmp_body;
-  proxy_temp_path {out}/tmp_proxy;
-  fastcgi_temp_path {out}/tmp_fcgi;
-  uwsgi_temp_path {out}/tmp_uwsgi;
-  scgi_temp_path {out}/tmp_scgi;
-  default_type application/octet-stream;
-  keepalive_requests 100000;
-  server {{ listen 127.0.0.1:{port}; root {root}; }}
-}}
-""")
-    p = subprocess.Popen([nginx, "-c", conf, "-p", out, "-e", f"{out}/error.log"],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    end = time.monotonic() + 15
-    while time.monotonic() < end:
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-                return p, port
-        except OSError:
-            time.sleep(0.05)
-    p.kill()
-    sys.exit("remote_read_pairs: nginx did not start")
 
 
 def main():
@@ -96,7 +53,7 @@ def main():
     os.makedirs(www, exist_ok=True)
     name = f"u16_{a.size}_zstd_c{a.chunk}_s{a.shard}.zarr"
     make_store(os.path.join(www, name), a.size, a.chunk, a.shard, "zstd")
-    nginx, port = start_nginx(www, out)
+    nginx, port, _ = start_nginx(out, www, "remote_read_pairs")
     url = f"http://127.0.0.1:{port}/{name}"
     env = {k: v for k, v in os.environ.items() if not k.lower().endswith("_proxy")}
     env["VOLVIS_HTTP_STATS"] = "1"
@@ -117,8 +74,7 @@ def main():
         r = subprocess.run([a.bench, url, "--threads", str(a.threads), "--repeat",
                             str(a.repeat)], capture_output=True, text=True, env=env)
     finally:
-        nginx.terminate()
-        nginx.wait(timeout=10)
+        stop_nginx(nginx)
     if r.returncode != 0:
         sys.exit(f"remote_read_pairs: {a.bench} failed: {r.stderr.strip()}")
     vals = {}
