@@ -23,10 +23,7 @@ anchor lines and the ratio zarr-python / VolVis (above 1: VolVis is faster).
 import argparse
 import os
 import re
-import statistics
-import subprocess
 import sys
-import time
 
 import numpy as np
 import zarr
@@ -35,7 +32,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "tests", "io"))
 from http_common import start_nginx, stop_nginx  # noqa: E402
-from zarr_read_pairs import make_store  # noqa: E402
+from pairs_common import make_store, run_bench, time_it  # noqa: E402
 
 
 def main():
@@ -61,28 +58,14 @@ def main():
         os.environ.pop(k, None)
     try:
         zarr.config.set({"threading.max_workers": a.threads})
-        arr = zarr.open_array(url, mode="r")
-        v = arr[...]  # warm: the session and its connections made
-        times = []
-        for _ in range(a.repeat):
-            t0 = time.perf_counter()
-            v = zarr.open_array(url, mode="r")[...]
-            times.append(time.perf_counter() - t0)
-        t_zarr = statistics.median(times)
+        t_zarr, _, v = time_it(lambda: zarr.open_array(url, mode="r")[...], a.repeat)
         sum_zarr = float(v.astype(np.float64).sum())
         del v
-        r = subprocess.run([a.bench, url, "--threads", str(a.threads), "--repeat",
-                            str(a.repeat)], capture_output=True, text=True, env=env)
+        vals, err = run_bench("remote_read_pairs", a.bench, url, a.threads, a.repeat, env=env)
     finally:
         stop_nginx(nginx)
-    if r.returncode != 0:
-        sys.exit(f"remote_read_pairs: {a.bench} failed: {r.stderr.strip()}")
-    vals = {}
-    for line in r.stdout.splitlines():
-        f = dict(kv.split("=", 1) for kv in line.split())
-        vals[f["op"]] = float(f["value"])
     t_vv, sum_vv = vals["zarr_read"], vals["zarr_read_sum"]
-    m = re.search(r"(\d+) requests, at most (\d+) in flight", r.stderr)
+    m = re.search(r"(\d+) requests, at most (\d+) in flight", err)
     if sum_vv != sum_zarr:
         sys.exit(f"remote_read_pairs: the readers disagree: volvis {sum_vv}, zarr-python "
                  f"{sum_zarr}")
