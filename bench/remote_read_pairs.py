@@ -31,7 +31,7 @@ import zarr
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "tests", "io"))
-from http_common import start_nginx, stop_nginx  # noqa: E402
+from http_common import start_nginx, stop_server  # noqa: E402
 from pairs_common import make_store, run_bench, time_it  # noqa: E402
 
 
@@ -63,7 +63,7 @@ def main():
         del v
         vals, err = run_bench("remote_read_pairs", a.bench, url, a.threads, a.repeat, env=env)
     finally:
-        stop_nginx(nginx)
+        stop_server(nginx)
     t_vv, sum_vv = vals["zarr_read"], vals["zarr_read_sum"]
     m = re.search(r"(\d+) requests, at most (\d+) in flight", err)
     if sum_vv != sum_zarr:

@@ -45,7 +45,7 @@ def start_nginx(out, root, who, tls=None, access_log=None):
     certificate, its key), HTTPS (HTTP/2 offered) on a second. ACCESS_LOG: a file where
     each request is logged as "$status $request_method "$uri" "$http_range"
     $body_bytes_sent $server_protocol" (None: no access log). Returns (process, port,
-    TLS port or None) once every port accepts; stop it with stop_nginx(process). When it
+    TLS port or None) once every port accepts; stop it with stop_server(process). When it
     does not start, exits with one line "WHO: nginx did not start (...)"."""
     nginx = nginx_path()
     if not nginx:
@@ -88,14 +88,15 @@ http {{
                              stdout=subprocess.DEVNULL, stderr=err)
     if all(wait_port(q, p) for q in (port, sport) if q):
         return p, port, sport
-    stop_nginx(p)
+    stop_server(p)
     with open(stderr, errors="replace") as f:
         why = " ".join(f.read().split())
     sys.exit(f"{who}: nginx did not start ({why or 'no port accepted within 15 s'})")
 
 
-def stop_nginx(p):
-    """Stops an nginx of start_nginx: SIGTERM, SIGKILL after 10 s; waits for it."""
+def stop_server(p):
+    """Stops a server's process P (an nginx of start_nginx, a moto server): SIGTERM,
+    SIGKILL when it has not ended 10 s later; waits for it."""
     p.terminate()
     try:
         p.wait(timeout=10)

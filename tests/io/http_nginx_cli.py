@@ -37,7 +37,7 @@ except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
 from cli_common import read_nrrd  # noqa: E402
-from http_common import make_ca, nginx_path, setup, start_nginx, stop_nginx  # noqa: E402
+from http_common import make_ca, nginx_path, setup, start_nginx, stop_server  # noqa: E402
 
 if not nginx_path():
     print("skipped: nginx is missing (apt-get install nginx-light)")
@@ -203,5 +203,5 @@ try:
     one_line(volvis("info", f"{http}/nothing.ome.zarr"), f"{http}/nothing.ome.zarr",
              "a store that is not there")
 finally:
-    stop_nginx(nginx)
+    stop_server(nginx)
 check.finish("http_nginx_cli")
