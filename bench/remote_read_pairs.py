@@ -23,62 +23,16 @@ anchor lines and the ratio zarr-python / VolVis (above 1: VolVis is faster).
 import argparse
 import os
 import re
-import shutil
-import socket
-import statistics
-import subprocess
 import sys
-import time
 
 import numpy as np
 import zarr
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from zarr_read_pairs import make_store  # noqa: E402
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def start_nginx(root, out):
-    nginx = shutil.which("nginx") or "/usr/sbin/nginx"
-    if not os.path.exists(nginx):
-        sys.exit("remote_read_pairs: nginx is missing (apt-get install nginx-light)")
-    port = free_port()
-    conf = os.path.join(out, "nginx.conf")
-    with open(conf, "w") as f:
-        f.write(f"""daemon off;
-master_process off;
-worker_processes 1;
-pid {out}/nginx.pid;
-error_log {out}/error.log;
-events {{ worker_connections 1024; }}
-http {{
-  access_log off;
-  client_body_temp_path {out}/tmp_body;
-  proxy_temp_path {out}/tmp_proxy;
-  fastcgi_temp_path {out}/tmp_fcgi;
-  uwsgi_temp_path {out}/tmp_uwsgi;
-  scgi_temp_path {out}/tmp_scgi;
-  default_type application/octet-stream;
-  keepalive_requests 100000;
-  server {{ listen 127.0.0.1:{port}; root {root}; }}
-}}
-""")
-    p = subprocess.Popen([nginx, "-c", conf, "-p", out, "-e", f"{out}/error.log"],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    end = time.monotonic() + 15
-    while time.monotonic() < end:
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-                return p, port
-        except OSError:
-            time.sleep(0.05)
-    p.kill()
-    sys.exit("remote_read_pairs: nginx did not start")
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "tests", "io"))
+from http_common import start_nginx, stop_server  # noqa: E402
+from pairs_common import make_store, run_bench, time_it  # noqa: E402
 
 
 def main():
@@ -96,7 +50,7 @@ def main():
     os.makedirs(www, exist_ok=True)
     name = f"u16_{a.size}_zstd_c{a.chunk}_s{a.shard}.zarr"
     make_store(os.path.join(www, name), a.size, a.chunk, a.shard, "zstd")
-    nginx, port = start_nginx(www, out)
+    nginx, port, _ = start_nginx(out, www, "remote_read_pairs")
     url = f"http://127.0.0.1:{port}/{name}"
     env = {k: v for k, v in os.environ.items() if not k.lower().endswith("_proxy")}
     env["VOLVIS_HTTP_STATS"] = "1"
@@ -104,29 +58,14 @@ def main():
         os.environ.pop(k, None)
     try:
         zarr.config.set({"threading.max_workers": a.threads})
-        arr = zarr.open_array(url, mode="r")
-        v = arr[...]  # warm: the session and its connections made
-        times = []
-        for _ in range(a.repeat):
-            t0 = time.perf_counter()
-            v = zarr.open_array(url, mode="r")[...]
-            times.append(time.perf_counter() - t0)
-        t_zarr = statistics.median(times)
+        t_zarr, _, v = time_it(lambda: zarr.open_array(url, mode="r")[...], a.repeat)
         sum_zarr = float(v.astype(np.float64).sum())
         del v
-        r = subprocess.run([a.bench, url, "--threads", str(a.threads), "--repeat",
-                            str(a.repeat)], capture_output=True, text=True, env=env)
+        vals, err = run_bench("remote_read_pairs", a.bench, url, a.threads, a.repeat, env=env)
     finally:
-        nginx.terminate()
-        nginx.wait(timeout=10)
-    if r.returncode != 0:
-        sys.exit(f"remote_read_pairs: {a.bench} failed: {r.stderr.strip()}")
-    vals = {}
-    for line in r.stdout.splitlines():
-        f = dict(kv.split("=", 1) for kv in line.split())
-        vals[f["op"]] = float(f["value"])
+        stop_server(nginx)
     t_vv, sum_vv = vals["zarr_read"], vals["zarr_read_sum"]
-    m = re.search(r"(\d+) requests, at most (\d+) in flight", r.stderr)
+    m = re.search(r"(\d+) requests, at most (\d+) in flight", err)
     if sum_vv != sum_zarr:
         sys.exit(f"remote_read_pairs: the readers disagree: volvis {sum_vv}, zarr-python "
                  f"{sum_zarr}")

@@ -23,55 +23,14 @@ what a loaded machine distorts least).
 """
 import argparse
 import os
-import statistics
-import subprocess
 import sys
-import time
 
 import numpy as np
 import tensorstore as ts
 import zarr
-from zarr.codecs import BloscCodec, BytesCodec, GzipCodec, ZstdCodec
 
-
-def make_store(path, size, chunk, shard, codec):
-    stamp = os.path.join(path, ".made")
-    want = f"{size} {chunk} {shard} {codec}\n"
-    if os.path.exists(stamp) and open(stamp).read() == want:
-        return
-    rng = np.random.default_rng(7)
-    z = np.linspace(-1, 1, size, dtype=np.float32)
-    compressors = {
-        "zstd": [ZstdCodec(level=3)],
-        "blosc": [BloscCodec(cname="lz4", clevel=5, shuffle="shuffle")],
-        "gzip": [GzipCodec(level=1)],
-        "none": [],
-    }[codec]
-    kw = dict(shape=(size,) * 3, chunks=(chunk,) * 3, dtype="uint16", compressors=compressors,
-              serializer=BytesCodec(endian="little"), fill_value=0, zarr_format=3,
-              dimension_names=["z", "y", "x"])
-    if shard:
-        kw["shards"] = (shard,) * 3
-    arr = zarr.create_array(store=path, overwrite=True, **kw)
-    for k0 in range(0, size, chunk):
-        zz = z[k0:k0 + chunk, None, None]
-        slab = (np.sqrt(zz ** 2 + z[None, :, None] ** 2 + z[None, None, :] ** 2) * 2000
-                + rng.integers(0, 64, (len(zz), size, size))).astype(np.uint16)
-        arr[k0:k0 + chunk] = slab
-    open(stamp, "w").write(want)
-
-
-def time_it(fn, repeat):
-    """Median wall seconds and median CPU seconds (the process's, all threads) of a read."""
-    fn()  # warm: the files in the page cache, the readers' set-up done
-    times, cpus, out = [], [], None
-    for _ in range(repeat):
-        out = None
-        t0, c0 = time.perf_counter(), time.process_time()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-        cpus.append(time.process_time() - c0)
-    return statistics.median(times), statistics.median(cpus), out
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pairs_common import make_store, run_bench, time_it  # noqa: E402
 
 
 def main():
@@ -101,14 +60,7 @@ def main():
                       a.repeat)
     sum_ts = float(v.astype(np.float64).sum())
     del v
-    r = subprocess.run([a.bench, path, "--threads", str(a.threads), "--repeat", str(a.repeat)],
-                       capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"zarr_read_pairs: {a.bench} failed: {r.stderr.strip()}")
-    vals = {}
-    for line in r.stdout.splitlines():
-        f = dict(kv.split("=", 1) for kv in line.split())
-        vals[f["op"]] = float(f["value"])
+    vals, _ = run_bench("zarr_read_pairs", a.bench, path, a.threads, a.repeat)
     t_vv, c_vv, sum_vv = vals["zarr_read"], vals["zarr_read_cpu"], vals["zarr_read_sum"]
     if not (sum_vv == sum_zarr == sum_ts):
         sys.exit(f"zarr_read_pairs: the readers disagree: volvis {sum_vv}, zarr-python "

@@ -68,34 +68,61 @@ def cache_line(s):
     return s.text(s.find_label(lambda n: n.startswith("out of core:")))
 
 
+def converged_frame(s, prefix, out, tag, at_convergence, label_timeout=20):
+    """A session's converged view, kept: the View page's out-of-core line (the label
+    whose text starts with PREFIX, there within LABEL_TIMEOUT s) until it says
+    "converged" (within 120 s); AT_CONVERGENCE(its first text, its converged text), the
+    session's checks of them; a second later the full frame copied to
+    TAG + "converged.png", the window to TAG + "window.png" and the session saved as
+    OUT/TAG + "session.json". Returns (the frame's PNG, the session's path)."""
+    s.page("View")
+    first = s.text(s.find_label(lambda n: n.startswith(prefix), timeout=label_timeout))
+    line = lambda: s.text(s.find_label(lambda n: n.startswith(prefix)))  # noqa: E731
+    s.wait_for(lambda: "converged" in line(), f"never converged: {line()!r}", timeout=120)
+    at_convergence(first, line())
+    time.sleep(1)
+    shot = s.full_png(copy_to=f"{tag}converged.png")
+    s.screenshot(f"{tag}window.png")
+    session = os.path.join(out, f"{tag}session.json")
+    s.save_as(session)
+    return shot, session
+
+
+def same_as_cli(shot, session, png, what, options=(), says=None):
+    """`volvis render SESSION` (OPTIONS added) to PNG must succeed (its output saying
+    SAYS, when given) and draw the GUI's frame SHOT within rounding (PSNR 30 dB or more);
+    WHAT names the GUI's frame in the messages."""
+    r = subprocess.run([CLI, "render", session, *options, "-o", png], capture_output=True,
+                       text=True)
+    print(f"volvis render {' '.join(options)} of {os.path.basename(session)}: "
+          f"{r.stdout.strip()} {r.stderr.strip()}")
+    check(r.returncode == 0 and (says is None or says in r.stdout),
+          f"volvis render of the session of {what} failed: {r.stderr}")
+    q = psnr(shot, png)
+    print(f"{what} against volvis render of the session: {q:.1f} dB")
+    check(q >= 30, f"{what} is not the CLI's ({q:.1f} dB)")
+
+
 def main():
     store = make_store()
     env = {"VOLVIS_MEMORY_LIMIT": "16M"}
     with Session(GUI, [store], OUT, env=env, window=(1100, 720)) as s:
         s.wait_full(0, "opening the pyramid")
-        s.page("View")
-        nav = s.find_label(lambda n: n.startswith("out of core:"), timeout=20)
-        first = s.text(nav)
-        print(f"first: {first!r}")
-        check("of 16 MiB" in first, f"the cache line does not name the limit: {first!r}")
-        s.wait_for(lambda: "converged" in cache_line(s), f"never converged: {cache_line(s)!r}",
-                   timeout=120)
-        line = cache_line(s)
-        print(f"converged: {line!r}")
-        opening = [f for f in s.frames_log() if f["state"] == s.frames_log()[-1]["state"]]
-        fulls = [f for f in opening if f["kind"] == "full"]
-        print(f"opening: {[(f['kind'], f['render_ms']) for f in opening]}")
-        check(len(fulls) >= 2, "the full frame did not sharpen (one full frame at opening)")
-        m = re.search(r"\(([0-9.]+) of 16 MiB\)", line)
-        check(m and float(m.group(1)) <= 16, f"the cache exceeds its limit: {line!r}")
-        levels = [int(x) for x in re.findall(r" (\d+) \(\d+ nodes\)", line)]
-        check(levels and min(levels) <= 1, f"no fine level in use: {line!r}")
-        time.sleep(1)
-        shot = s.full_png(copy_to="converged.png")
-        s.screenshot("converged_window.png")
+
+        def opened(first, line):
+            print(f"first: {first!r}")
+            check("of 16 MiB" in first, f"the cache line does not name the limit: {first!r}")
+            print(f"converged: {line!r}")
+            opening = [f for f in s.frames_log() if f["state"] == s.frames_log()[-1]["state"]]
+            fulls = [f for f in opening if f["kind"] == "full"]
+            print(f"opening: {[(f['kind'], f['render_ms']) for f in opening]}")
+            check(len(fulls) >= 2, "the full frame did not sharpen (one full frame at opening)")
+            m = re.search(r"\(([0-9.]+) of 16 MiB\)", line)
+            check(m and float(m.group(1)) <= 16, f"the cache exceeds its limit: {line!r}")
+            levels = [int(x) for x in re.findall(r" (\d+) \(\d+ nodes\)", line)]
+            check(levels and min(levels) <= 1, f"no fine level in use: {line!r}")
         # the same view through the CLI: the session's camera, the store out of core
-        session = os.path.join(OUT, "session.json")
-        s.save_as(session)
+        shot, session = converged_frame(s, "out of core:", OUT, "", opened)
         # a drag: previews of the data, then the image sharpens again
         s.focus_main()
         n0 = len(s.frames_log())
@@ -151,14 +178,8 @@ def main():
         check("level 0 (256 x 256 x 108), read out of core" in vt,
               f"voxel counting did not read level 0: {vt!r}")
         s.quit_discard()
-    cli = os.path.join(OUT, "cli.png")
-    import json
-    scene = json.load(open(session))
-    w, h = scene["view"]["width"], scene["view"]["height"]
-    r = subprocess.run([CLI, "render", session, "-o", cli, "--quiet"], capture_output=True,
-                       text=True)
-    print(f"session {w}x{h}: {r.stderr.strip()}")
-    check(r.returncode == 0, f"volvis render of the session failed: {r.stderr}")
+    same_as_cli(shot, session, os.path.join(OUT, "cli.png"), "the GUI's converged frame",
+                ["--quiet"])
     r = subprocess.run([CLI, "slice", session, "--probe", f"{x!r},{y!r},{z!r}"],
                        capture_output=True, text=True)
     check(r.returncode == 0, f"volvis slice --probe: {r.stderr}")
@@ -176,9 +197,6 @@ def main():
     m = re.search(r"Marching Cubes \((\d+) triangles\)", r.stdout)
     check(r.returncode == 0 and m and f" {m.group(1)} triangles" in it,
           f"the GUI's level-0 Marching Cubes is not volvis measure's: {it!r} / {r.stdout}")
-    q = psnr(shot, cli)
-    print(f"the GUI's converged frame against volvis render of the session: {q:.1f} dB")
-    check(q >= 30, f"the GUI's converged frame is not the CLI's ({q:.1f} dB)")
     # a second GUI session runs in a process of its own (pyatspi keeps the
     # first session's bus), and so does a third
     r = subprocess.run([sys.executable, os.path.abspath(__file__), GUI, CLI, OUT, "two"])
@@ -221,30 +239,19 @@ def two_pyramids():
     with Session(GUI, [scene], out, env={"VOLVIS_MEMORY_LIMIT": "16M"},
                  window=(1100, 720)) as s:
         s.wait_full(0, "opening the scene")
-        s.page("View")
-        s.find_label(lambda n: n.startswith("3 objects out of core:"), timeout=30)
-        line = lambda: s.text(s.find_label(lambda n: n.startswith("3 objects out of core:")))
-        s.wait_for(lambda: "converged" in line(), f"never converged: {line()!r}", timeout=120)
-        print(f"three objects of two pyramids: {line()!r}")
-        m = re.search(r"\(([0-9.]+) of 16 MiB\)", line())
-        most = re.search(r"at most ([0-9.]+) MiB", line())
-        check(m and float(m.group(1)) <= 16 and most and float(most.group(1)) <= 16,
-              f"the three objects' pieces are not within one budget of 16 MiB: {line()!r}")
-        time.sleep(1)
-        shot = s.full_png(copy_to="two_converged.png")
-        s.screenshot("two_window.png")
-        session = os.path.join(out, "session.json")
-        s.save_as(session)
+
+        def within_budget(first, line):
+            print(f"three objects of two pyramids: {line!r}")
+            m = re.search(r"\(([0-9.]+) of 16 MiB\)", line)
+            most = re.search(r"at most ([0-9.]+) MiB", line)
+            check(m and float(m.group(1)) <= 16 and most and float(most.group(1)) <= 16,
+                  f"the three objects' pieces are not within one budget of 16 MiB: {line!r}")
+        shot, session = converged_frame(s, "3 objects out of core:", out, "two_", within_budget,
+                                        label_timeout=30)
         s.quit()
-    cli = os.path.join(out, "two_cli.png")
-    r = subprocess.run([CLI, "render", session, "--memory-limit", "32M", "-o", cli],
-                       capture_output=True, text=True)
-    print(f"volvis render of the session out of core: {r.stdout.strip()} {r.stderr.strip()}")
-    check(r.returncode == 0 and "3 objects out of core" in r.stdout,
-          f"volvis render of the session out of core failed: {r.stderr}")
-    q = psnr(shot, cli)
-    print(f"the GUI's three objects against volvis render of the session: {q:.1f} dB")
-    check(q >= 30, f"the GUI's frame of three objects is not the CLI's ({q:.1f} dB)")
+    same_as_cli(shot, session, os.path.join(out, "two_cli.png"),
+                "the GUI's frame of three objects", ["--memory-limit", "32M"],
+                says="3 objects out of core")
 
 
 REMOTE_WHAT = "reads of remote stores"
@@ -270,13 +277,8 @@ def url_session():
     sc["objects"][0]["file"] = store
     local = os.path.join(out, "url_local.json")
     json.dump(sc, open(local, "w"))
-    cli = os.path.join(out, "url_cli.png")
-    r = subprocess.run([CLI, "render", local, "--memory-limit", "16M", "-o", cli],
-                       capture_output=True, text=True)
-    check(r.returncode == 0, f"volvis render of the URL's session by path failed: {r.stderr}")
-    q = psnr(shot, cli)
-    print(f"the GUI's frame of the URL against volvis render of the store by path: {q:.1f} dB")
-    check(q >= 30, f"the GUI's frame of the URL is not the store's ({q:.1f} dB)")
+    same_as_cli(shot, local, os.path.join(out, "url_cli.png"),
+                "the GUI's frame of the URL (the store by path)", ["--memory-limit", "16M"])
 
 
 def open_url(s, store, out):
@@ -328,18 +330,12 @@ def open_url(s, store, out):
         s.wait_for(lambda: shown() == "", "the pending line stays after the reads ended",
                    timeout=120)
         s.wait_full(n0, "opening the URL")
-        s.page("View")
-        s.wait_for(lambda: "converged" in cache_line(s), f"never converged: {cache_line(s)!r}",
-                   timeout=120)
-        check(shown() == "", f"the pending line is shown once converged: {shown()!r}")
-        print(f"converged over HTTP: {cache_line(s)!r}; served {drip.requests} requests, "
-              f"{drip.sent} bytes")
-        time.sleep(1)
-        shot = s.full_png(copy_to="url_converged.png")
-        s.screenshot("url_window.png")
-        session = os.path.join(out, "url_session.json")
-        s.save_as(session)
-        return shot, session
+
+        def pending_gone(first, line):
+            check(shown() == "", f"the pending line is shown once converged: {shown()!r}")
+            print(f"converged over HTTP: {line!r}; served {drip.requests} requests, "
+                  f"{drip.sent} bytes")
+        return converged_frame(s, "out of core:", out, "url_", pending_gone)
     finally:
         srv.shutdown()
         srv.server_close()

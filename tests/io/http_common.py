@@ -1,6 +1,7 @@
-"""Helpers of the remote-store tests (http_nginx_cli.py, http_hostile_cli.py, s3_moto_cli.py):
-a free loopback port, a test CA and server certificate made with openssl; the stores they
-serve come from cli_common.write_stores."""
+"""Helpers of the remote-store tests (http_nginx_cli.py, http_hostile_cli.py, s3_moto_cli.py)
+and of bench/remote_read_pairs.py: a free loopback port, a test CA and server certificate
+made with openssl, Debian's nginx serving a folder; the stores the tests serve come from
+cli_common.write_stores."""
 import os
 import shutil
 import socket
@@ -28,6 +29,80 @@ def wait_port(port, proc, timeout=15.0):
         except OSError:
             time.sleep(0.05)
     return 0
+
+
+def nginx_path():
+    """Debian's nginx (nginx-light): its path, or None when it is not installed."""
+    return shutil.which("nginx") or ("/usr/sbin/nginx" if os.path.exists("/usr/sbin/nginx")
+                                     else None)
+
+
+def start_nginx(out, root, who, tls=None, access_log=None):
+    """nginx serving the files under ROOT on free loopback ports: one process, not a
+    daemon, a configuration of its own written in OUT (nginx.conf; its pid, error log,
+    stderr and temporary folders there too; not the system's service), 1024
+    connections, 100000 requests a connection. HTTP on one port; with TLS = (server
+    certificate, its key), HTTPS (HTTP/2 offered) on a second. ACCESS_LOG: a file where
+    each request is logged as "$status $request_method "$uri" "$http_range"
+    $body_bytes_sent $server_protocol" (None: no access log). Returns (process, port,
+    TLS port or None) once every port accepts; stop it with stop_server(process). When it
+    does not start, exits with one line "WHO: nginx did not start (...)"."""
+    nginx = nginx_path()
+    if not nginx:
+        sys.exit(f"{who}: nginx is missing (apt-get install nginx-light)")
+    port = free_port()
+    sport = free_port() if tls else None
+    log = (f"log_format ranges '$status $request_method \"$uri\" \"$http_range\" "
+           f"$body_bytes_sent $server_protocol';\n  access_log {access_log} ranges;"
+           if access_log else "access_log off;")
+    ssl = (f"""
+  server {{
+    listen 127.0.0.1:{sport} ssl http2;
+    ssl_certificate {tls[0]};
+    ssl_certificate_key {tls[1]};
+    root {root};
+  }}""" if tls else "")
+    conf = os.path.join(out, "nginx.conf")
+    with open(conf, "w") as f:
+        f.write(f"""daemon off;
+master_process off;
+worker_processes 1;
+pid {out}/nginx.pid;
+error_log {out}/error.log;
+events {{ worker_connections 1024; }}
+http {{
+  {log}
+  client_body_temp_path {out}/tmp_body;
+  proxy_temp_path {out}/tmp_proxy;
+  fastcgi_temp_path {out}/tmp_fcgi;
+  uwsgi_temp_path {out}/tmp_uwsgi;
+  scgi_temp_path {out}/tmp_scgi;
+  default_type application/octet-stream;
+  keepalive_requests 100000;
+  server {{ listen 127.0.0.1:{port}; root {root}; }}{ssl}
+}}
+""")
+    stderr = os.path.join(out, "nginx.stderr")
+    with open(stderr, "wb") as err:
+        p = subprocess.Popen([nginx, "-c", conf, "-p", out, "-e", f"{out}/error.log"],
+                             stdout=subprocess.DEVNULL, stderr=err)
+    if all(wait_port(q, p) for q in (port, sport) if q):
+        return p, port, sport
+    stop_server(p)
+    with open(stderr, errors="replace") as f:
+        why = " ".join(f.read().split())
+    sys.exit(f"{who}: nginx did not start ({why or 'no port accepted within 15 s'})")
+
+
+def stop_server(p):
+    """Stops a server's process P (an nginx of start_nginx, a moto server): SIGTERM,
+    SIGKILL when it has not ended 10 s later; waits for it."""
+    p.terminate()
+    try:
+        p.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.wait()
 
 
 def make_ca(d):

@@ -37,45 +37,16 @@ except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
 from cli_common import read_nrrd  # noqa: E402
-from http_common import free_port, make_ca, setup, wait_port  # noqa: E402
+from http_common import make_ca, nginx_path, setup, start_nginx, stop_server  # noqa: E402
 
-NGINX = shutil.which("nginx") or ("/usr/sbin/nginx" if os.path.exists("/usr/sbin/nginx") else None)
-if not NGINX:
+if not nginx_path():
     print("skipped: nginx is missing (apt-get install nginx-light)")
     sys.exit(77)
 
 VOLVIS, OUT, check, www, v3, v2 = setup()
 ca, crt, key = make_ca(OUT)
-port, sport = free_port(), free_port()
 log = os.path.join(OUT, "access.log")
-conf = os.path.join(OUT, "nginx.conf")
-with open(conf, "w") as f:
-    f.write(f"""daemon off;
-master_process off;
-worker_processes 1;
-pid {OUT}/nginx.pid;
-error_log {OUT}/error.log;
-events {{ worker_connections 256; }}
-http {{
-  log_format ranges '$status $request_method "$uri" "$http_range" $body_bytes_sent $server_protocol';
-  access_log {log} ranges;
-  client_body_temp_path {OUT}/tmp_body;
-  proxy_temp_path {OUT}/tmp_proxy;
-  fastcgi_temp_path {OUT}/tmp_fcgi;
-  uwsgi_temp_path {OUT}/tmp_uwsgi;
-  scgi_temp_path {OUT}/tmp_scgi;
-  default_type application/octet-stream;
-  server {{ listen 127.0.0.1:{port}; root {www}; }}
-  server {{
-    listen 127.0.0.1:{sport} ssl http2;
-    ssl_certificate {crt};
-    ssl_certificate_key {key};
-    root {www};
-  }}
-}}
-""")
-nginx = subprocess.Popen([NGINX, "-c", conf, "-p", OUT, "-e", f"{OUT}/error.log"],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+nginx, port, sport = start_nginx(OUT, www, "http_nginx_cli", tls=(crt, key), access_log=log)
 env = {k: v for k, v in os.environ.items() if not k.lower().endswith("_proxy")}
 env["SSL_CERT_FILE"] = env["CURL_CA_BUNDLE"] = ca
 
@@ -97,9 +68,6 @@ def one_line(p, needle, what):
 
 
 try:
-    if not (wait_port(port, nginx) and wait_port(sport, nginx)):
-        print("nginx did not start:", nginx.stderr.read().decode() if nginx.stderr else "")
-        sys.exit(1)
     http = f"http://127.0.0.1:{port}"
     https = f"https://127.0.0.1:{sport}"
     for name, local in (("v3", v3), ("v2", v2)):
@@ -235,9 +203,5 @@ try:
     one_line(volvis("info", f"{http}/nothing.ome.zarr"), f"{http}/nothing.ome.zarr",
              "a store that is not there")
 finally:
-    nginx.terminate()
-    try:
-        nginx.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        nginx.kill()
+    stop_server(nginx)
 check.finish("http_nginx_cli")

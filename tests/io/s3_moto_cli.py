@@ -34,7 +34,7 @@ try:
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv with moto[server])")
     sys.exit(77)
-from http_common import free_port, setup, wait_port  # noqa: E402
+from http_common import free_port, setup, stop_server, wait_port  # noqa: E402
 
 VOLVIS, OUT, check, www, v3, _ = setup(n=64)
 port = free_port()
@@ -134,9 +134,5 @@ try:
              "an absent store")
 finally:
     for srv in (server, server2):
-        srv.terminate()
-        try:
-            srv.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            srv.kill()
+        stop_server(srv)
 check.finish("s3_moto_cli")

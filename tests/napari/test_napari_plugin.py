@@ -129,39 +129,57 @@ def _final(qtbot, w, before):
     return w.image.copy()
 
 
-def _cli_render(world, view, out_dir, name, volume):
-    """`volvis render` of the widget's World (saved as a scene) at its view,
-    by level of detail 1 pixel a voxel, as napari shows it."""
+def _widget_3d(v, angles, max_side, reset_view=False):
+    """The viewer V in 3-D (its view first reset to its layers when
+    RESET_VIEW), the camera at ANGLES, and a "VolVis 3-D" widget of it
+    (frames of at most MAX_SIDE pixels, 10 ms debounce), not docked."""
+    from volvis.napari._widget import VolVisWidget, viewer_camera
+    v.dims.ndisplay = 3
+    if reset_view:
+        v.reset_view()
+    viewer_camera(v).angles = angles
+    return VolVisWidget(v, max_side=max_side, debounce_ms=10)
+
+
+def _widget_of_file(make_napari_viewer, path, angles, max_side, **layer):
+    """A napari viewer with PATH opened by the plug-in (its one layer given the
+    attributes LAYER, in order) and _widget_3d's widget of it: (viewer,
+    layer, widget)."""
+    v = make_napari_viewer()
+    L = v.open(str(path), plugin="volvis")[0]
+    for k, val in layer.items():
+        setattr(L, k, val)
+    return v, L, _widget_3d(v, angles, max_side)
+
+
+def _cli_render(frame, out_dir, name, volumes, options=("--lod", "1")):
+    """`volvis render` of a widget frame's World (saved as the scene
+    OUT_DIR/NAME.json of the files VOLUMES, one an object) at its view and
+    size, with OPTIONS (default: by level of detail 1 pixel a voxel, as napari
+    shows it): the image, mirrored back when the frame was drawn mirrored."""
     scene = out_dir / (name + ".json")
-    w = world.clone()
-    w.view = view
-    w.save(str(scene), volume_files=[str(volume)])
+    w = frame["world"].clone()
+    w.view = frame["view"]
+    w.save(str(scene), volume_files=[str(p) for p in volumes])
     png = out_dir / (name + "_cli.png")
-    size = "%dx%d" % view.size
-    subprocess.run([cli(), "render", str(scene), "--lod", "1", "--size", size, "-o", str(png)],
+    size = "%dx%d" % frame["view"].size
+    subprocess.run([cli(), "render", str(scene), *options, "--size", size, "-o", str(png)],
                    check=True, capture_output=True)
-    return volvis.read_png(str(png))
+    ref = volvis.read_png(str(png))
+    return ref[:, ::-1] if frame["mirror"] else ref
 
 
 @pytest.mark.parametrize("rendering", ["mip", "translucent"])
 def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin, ct_vvb,
                                                 out_dir, rendering):
-    from volvis.napari._widget import VolVisWidget, viewer_camera
-    v = make_napari_viewer()
-    L = v.open(str(ct_vvb), plugin="volvis")[0]
-    L.rendering = rendering
-    L.colormap = "inferno"
-    L.gamma = 0.8
-    v.dims.ndisplay = 3
-    viewer_camera(v).angles = (0, 20, 80)
-    w = VolVisWidget(v, max_side=256, debounce_ms=10)
+    from volvis.napari._widget import viewer_camera
+    v, L, w = _widget_of_file(make_napari_viewer, ct_vvb, (0, 20, 80), 256,
+                              rendering=rendering, colormap="inferno", gamma=0.8)
     v.window.add_dock_widget(w, name="VolVis 3-D")
     img1 = _final(qtbot, w, 0)
     f1 = dict(w.frame)
     volvis.save_png(img1, str(out_dir / ("widget_%s_1.png" % rendering)))
-    ref1 = _cli_render(f1["world"], f1["view"], out_dir, "widget_%s_1" % rendering, ct_vvb)
-    if f1["mirror"]:
-        ref1 = ref1[:, ::-1]
+    ref1 = _cli_render(f1, out_dir, "widget_%s_1" % rendering, [ct_vvb])
     p1 = psnr(img1, ref1)
     assert p1 >= 40, "widget vs volvis render: %.2f dB" % p1
     assert img1[..., :3].max() > 50, "a black frame"
@@ -174,9 +192,7 @@ def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin
     f2 = dict(w.frame)
     volvis.save_png(img2, str(out_dir / ("widget_%s_2.png" % rendering)))
     assert psnr(img1, img2) < 30, "the frame did not change with the camera"
-    ref2 = _cli_render(f2["world"], f2["view"], out_dir, "widget_%s_2" % rendering, ct_vvb)
-    if f2["mirror"]:
-        ref2 = ref2[:, ::-1]
+    ref2 = _cli_render(f2, out_dir, "widget_%s_2" % rendering, [ct_vvb])
     p2 = psnr(img2, ref2)
     assert p2 >= 40, "after the turn, widget vs volvis render: %.2f dB" % p2
     print("PSNR %s: %.2f dB, %.2f dB after the turn" % (rendering, p1, p2))
@@ -188,17 +204,13 @@ def test_widget_attenuated_mip(make_napari_viewer, qtbot, plugin, out_dir):
     `volvis render --mode attenuated-mip --attenuation A` of the same data
     and view, differs from mip, and re-renders when the attenuation
     changes."""
-    from volvis.napari._widget import VolVisWidget, viewer_camera
     vol = volvis.open(str(DATA / "neghip.slc"))
     v = make_napari_viewer()
     L = v.add_image(np.array(vol.array), scale=tuple(vol.spacing)[::-1],
                     translate=tuple(vol.origin)[::-1], colormap="inferno",
                     contrast_limits=(20, 200), rendering="attenuated_mip")
     L.attenuation = 0.1
-    v.dims.ndisplay = 3
-    v.reset_view()
-    viewer_camera(v).angles = (0, 25, 70)
-    w = VolVisWidget(v, max_side=160, debounce_ms=10)
+    w = _widget_3d(v, (0, 25, 70), 160, reset_view=True)
     img = _final(qtbot, w, 0)
     f = dict(w.frame)
     (o,) = f["world"].objects
@@ -207,16 +219,8 @@ def test_widget_attenuated_mip(make_napari_viewer, qtbot, plugin, out_dir):
     volvis.save_png(img, str(out_dir / "widget_attenuated_mip.png"))
 
     def cli_ref(name, mode, att):
-        scene = out_dir / (name + ".json")
-        wc = f["world"].clone()
-        wc.view = f["view"]
-        wc.save(str(scene), volume_files=[str(DATA / "neghip.slc")])
-        png = out_dir / (name + "_cli.png")
-        subprocess.run([cli(), "render", str(scene), "--mode", mode, "--attenuation", str(att),
-                        "--size", "%dx%d" % f["view"].size, "-o", str(png)],
-                       check=True, capture_output=True)
-        ref = volvis.read_png(str(png))
-        return ref[:, ::-1] if f["mirror"] else ref
+        return _cli_render(f, out_dir, name, [DATA / "neghip.slc"],
+                           ("--mode", mode, "--attenuation", str(att)))
 
     p = psnr(img, cli_ref("attenuated", "attenuated-mip", 0.1))
     assert p >= 40, "attenuated_mip: widget vs volvis render: %.2f dB" % p
@@ -236,16 +240,12 @@ def test_widget_additive_blending(make_napari_viewer, qtbot, plugin, out_dir, re
     them: one object of two channels (VolVis's maximum rule for mip, its
     additive rule for translucent), whose frame is the sum of the frames of
     each layer alone."""
-    from volvis.napari._widget import VolVisWidget, viewer_camera
     a = np.array(volvis.open(str(DATA / "neghip.slc")).array)
     v = make_napari_viewer()
     layers = [v.add_image(d, colormap=c, contrast_limits=(0, 255), rendering=rendering,
                           blending="additive", opacity=0.8)
               for d, c in ((a, "green"), (np.ascontiguousarray(a[:, :, ::-1]), "magenta"))]
-    v.dims.ndisplay = 3
-    v.reset_view()
-    viewer_camera(v).angles = (0, 20, 75)
-    w = VolVisWidget(v, max_side=128, debounce_ms=10)
+    w = _widget_3d(v, (0, 20, 75), 128, reset_view=True)
     both = _final(qtbot, w, 0)
     volvis.save_png(both, str(out_dir / ("widget_additive_%s.png" % rendering)))
     both = both.astype(int)
@@ -305,14 +305,8 @@ def test_camera_mapping_against_napari_canvas(make_napari_viewer, qtbot, plugin,
 
 
 def test_widget_shadows(make_napari_viewer, qtbot, plugin, out_dir):
-    from volvis.napari._widget import VolVisWidget, viewer_camera
-    v = make_napari_viewer()
-    L = v.open(str(DATA / "ct_head.nrrd"), plugin="volvis")[0]  # in memory
-    L.rendering = "iso"
-    L.iso_threshold = 300
-    v.dims.ndisplay = 3
-    viewer_camera(v).angles = (0, 30, 70)
-    w = VolVisWidget(v, max_side=192, debounce_ms=10)
+    v, L, w = _widget_of_file(make_napari_viewer, DATA / "ct_head.nrrd",  # in memory
+                              (0, 30, 70), 192, rendering="iso", iso_threshold=300)
     plain = _final(qtbot, w, 0)
     w.shadows.setChecked(True)
     shadowed = _final(qtbot, w, w.finals)
@@ -324,17 +318,8 @@ def test_widget_shadows(make_napari_viewer, qtbot, plugin, out_dir):
     # (the ray tracer and the ray caster find the surface alike, to edge pixels)
     assert np.mean((plain[..., 3] > 0) != (shadowed[..., 3] > 0)) < 0.01
     # and it is what volvis render --renderer raytrace draws of the same World
-    f = w.frame
-    scene = out_dir / "widget_iso_shadows.json"
-    world = f["world"].clone()
-    world.view = f["view"]
-    world.save(str(scene), volume_files=[str(DATA / "ct_head.nrrd")])
-    png = out_dir / "widget_iso_shadows_cli.png"
-    subprocess.run([cli(), "render", str(scene), "--renderer", "raytrace", "--size",
-                    "%dx%d" % f["view"].size, "-o", str(png)], check=True, capture_output=True)
-    ref = volvis.read_png(str(png))
-    if f["mirror"]:
-        ref = ref[:, ::-1]
+    ref = _cli_render(w.frame, out_dir, "widget_iso_shadows", [DATA / "ct_head.nrrd"],
+                      ("--renderer", "raytrace"))
     p = psnr(shadowed, ref)
     assert p >= 40, "shadows: widget vs volvis render --renderer raytrace: %.2f dB" % p
 
@@ -361,18 +346,13 @@ def test_widget_level_of_detail(make_napari_viewer, qtbot, plugin, zarr_pyramid,
     only; the widget draws level 0 where the view needs it (zoomed in) and
     coarse levels where it does not (zoomed out), and equals volvis render
     --lod 1 of the same World and view."""
-    from volvis.napari._widget import VolVisWidget, viewer_camera
-    v = make_napari_viewer()
-    L = v.open(str(zarr_pyramid), plugin="volvis")[0]
+    from volvis.napari._widget import viewer_camera
+    v, L, w = _widget_of_file(make_napari_viewer, zarr_pyramid, (0, 25, 80), 256,
+                              rendering="translucent", colormap="viridis",
+                              contrast_limits=(90, 255))
     assert L.multiscale and [d.shape for d in L.data] == [(256,) * 3, (128,) * 3, (64,) * 3]
     np.testing.assert_allclose(L.scale, (0.5, 0.5, 0.5))
-    L.rendering = "translucent"
-    L.colormap = "viridis"
-    L.contrast_limits = (90, 255)
-    v.dims.ndisplay = 3
     cam = viewer_camera(v)
-    cam.angles = (0, 25, 80)
-    w = VolVisWidget(v, max_side=256, debounce_ms=10)
     base_zoom = cam.zoom
     cam.zoom = base_zoom / 4
     far = _final(qtbot, w, w.finals)
@@ -394,9 +374,7 @@ def test_widget_level_of_detail(make_napari_viewer, qtbot, plugin, zarr_pyramid,
     print("nodes per level: zoomed out %s, zoomed in %s" % (nodes_far, nodes_near))
     assert nodes_far[0] == 0 and sum(nodes_far[1:]) > 0, nodes_far
     assert nodes_near[0] > 0, nodes_near
-    ref = _cli_render(f["world"], f["view"], out_dir, "widget_lod_near", zarr_pyramid)
-    if f["mirror"]:
-        ref = ref[:, ::-1]
+    ref = _cli_render(f, out_dir, "widget_lod_near", [zarr_pyramid])
     p = psnr(near, ref)
     assert p >= 40, "LOD frame vs volvis render --lod 1: %.2f dB" % p
 
@@ -582,7 +560,6 @@ def test_widget_two_layers_and_visibility(make_napari_viewer, qtbot, plugin, out
     """Two visible layers are two objects of one World (MIP in green and
     magenta, combined by the maximum); hiding one re-renders (the widget
     follows the layers' events) and matches volvis render again."""
-    from volvis.napari._widget import VolVisWidget, viewer_camera
     v = make_napari_viewer()
     a = v.open(str(DATA / "neghip.slc"), plugin="volvis")[0]
     b = v.open(str(DATA / "ironProt.vtk"), plugin="volvis")[0]
@@ -591,15 +568,12 @@ def test_widget_two_layers_and_visibility(make_napari_viewer, qtbot, plugin, out
         L.colormap = cmap
         L.contrast_limits = (0, 255)
     b.translate = (0, 0, 80)
-    v.dims.ndisplay = 3
-    v.reset_view()
-    viewer_camera(v).angles = (0, 20, 75)
-    w = VolVisWidget(v, max_side=192, debounce_ms=10)
+    w = _widget_3d(v, (0, 20, 75), 192, reset_view=True)
     both = _final(qtbot, w, 0)
     f = dict(w.frame)
     assert len(f["world"].objects) == 2
-    ref = _cli_render_files(f, out_dir, "two_layers",
-                            [DATA / "neghip.slc", DATA / "ironProt.vtk"])
+    ref = _cli_render(f, out_dir, "two_layers", [DATA / "neghip.slc", DATA / "ironProt.vtk"],
+                      options=())
     assert psnr(both, ref) >= 40
     g, m = both[..., 1].astype(int), both[..., 0].astype(int)
     assert (g > m + 50).any() and (m > g + 50).any(), "both layers' colours"
@@ -611,19 +585,7 @@ def test_widget_two_layers_and_visibility(make_napari_viewer, qtbot, plugin, out
     assert len(f["world"].objects) == 1
     assert psnr(both, one) < 30
     assert not (one[..., 0].astype(int) > one[..., 1].astype(int) + 50).any()  # no magenta
-    ref = _cli_render_files(f, out_dir, "one_layer", [DATA / "neghip.slc"])
+    ref = _cli_render(f, out_dir, "one_layer", [DATA / "neghip.slc"], options=())
     assert psnr(one, ref) >= 40
     volvis.save_png(both, str(out_dir / "widget_two_layers.png"))
     volvis.save_png(one, str(out_dir / "widget_one_layer.png"))
-
-
-def _cli_render_files(f, out_dir, name, files):
-    scene = out_dir / (name + ".json")
-    w = f["world"].clone()
-    w.view = f["view"]
-    w.save(str(scene), volume_files=[str(p) for p in files])
-    png = out_dir / (name + "_cli.png")
-    subprocess.run([cli(), "render", str(scene), "--size", "%dx%d" % f["view"].size,
-                    "-o", str(png)], check=True, capture_output=True)
-    ref = volvis.read_png(str(png))
-    return ref[:, ::-1] if f["mirror"] else ref
