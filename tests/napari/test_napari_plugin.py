@@ -143,7 +143,7 @@ def _cli_render(world, view, out_dir, name, volume):
     return volvis.read_png(str(png))
 
 
-@pytest.mark.parametrize("rendering", ["mip", "translucent"])
+@pytest.mark.parametrize("rendering", ["mip", "translucent", "attenuated_mip"])
 def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin, ct_vvb,
                                                 out_dir, rendering):
     from volvis.napari._widget import VolVisWidget, viewer_camera
@@ -159,6 +159,10 @@ def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin
     img1 = _final(qtbot, w, 0)
     f1 = dict(w.frame)
     volvis.save_png(img1, str(out_dir / ("widget_%s_1.png" % rendering)))
+    if rendering == "attenuated_mip":  # out of core too (by regions), not drawn as mip
+        (o,) = f1["world"].objects
+        assert o.mode == "attenuated-mip" and o.attenuation == pytest.approx(L.attenuation)
+        assert not f1["notes"], f1["notes"]
     ref1 = _cli_render(f1["world"], f1["view"], out_dir, "widget_%s_1" % rendering, ct_vvb)
     if f1["mirror"]:
         ref1 = ref1[:, ::-1]
