@@ -794,9 +794,11 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
     double t0 = MPI_Wtime();
     struct timespec c0, c1;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
-    /* rank 0 renders its region even off screen in xray mode: the render
-     * gives the table that classifies the summed means at the end */
-    const int sum = obj->mode == VV_MODE_XRAY && p->rank == 0;
+    /* rank 0 renders its region even off screen in xray and attenuated-mip
+     * mode: the render gives the table that classifies the summed means (or
+     * the attenuated maxima) at the end */
+    const int sum =
+        (obj->mode == VV_MODE_XRAY || obj->mode == VV_MODE_ATTENUATED_MIP) && p->rank == 0;
     if (s == VV_OK && rg.x1 > rg.x0 && rg.y1 <= rg.y0 && !sum) {
         vv_region_image_clear(&ri); /* off screen */
         ri.op = vv_region_op_for(obj->mode);
@@ -850,7 +852,7 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
                          view->height);
     int agreed = 0;
     vv_region_op op = VV_REGION_OVER;
-    vv_region_image cls; /* its classify (xray), from rank 0's region render */
+    vv_region_image cls; /* its classify (xray, attenuated-mip), from rank 0's region render */
     memset(&cls, 0, sizeof cls);
     s = render_part(p, s, w, view, opt, &pl, &oi, &img, &op, &cls, &st, &agreed);
     /* every rank learns of any failure here, before the exchanges */
@@ -914,7 +916,7 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     st.max_composite = gmx[1];
     st.max_render_cpu = gmx[2];
     float *keys = NULL;
-    if (s == VV_OK && p->rank == 0 && op == VV_REGION_SUM &&
+    if (s == VV_OK && p->rank == 0 && (op == VV_REGION_SUM || op == VV_REGION_ATTENUATED_MAX) &&
         !(keys = malloc(sizeof(float) * (P ? P : 1))))
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     if (s == VV_OK && p->rank == 0) {
@@ -926,7 +928,7 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
                 keys[i] = r[5];
         }
         /* the background once, as the whole render adds it (xray: the means
-         * classified first) */
+         * classified first; attenuated-mip: the attenuated maxima) */
         vv_region_image fin = {.image = out,
                                .key = keys,
                                .op = op,

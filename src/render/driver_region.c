@@ -6,7 +6,8 @@
  * back, each brick one region render
  * (include/volvis/sys/renderer.h) of whichever renderer declares the
  * contract, over the pixels its box projects to, and the partial images
- * are combined in that order (over, or max/min for projections) --
+ * are combined in that order (over, or max/min for projections, sums for
+ * X-ray, scaled maxima for attenuated MIP: vv_region_op) --
  * sort-last compositing on one machine. The front-to-back order of the
  * brick grid is that of its k-d tree (cut the brick range in two along its
  * longest axis; the half holding the eye, or the half the view direction
@@ -690,6 +691,8 @@ node_region(const mr_frame *f, int L, const int n0[3], const int n1[3], vv_rende
     rg->object = f->object;
     rg->from = h; /* the node known by its level and box: a renderer may keep it */
     rg->level = L;
+    /* a step of level L against one of level 0 (its samples weigh as many of level 0's) */
+    rg->step_scale = f->vox[0] > 0 ? f->vox[L] / f->vox[0] : 1;
     for (int k = 0; k < 3; k++) {
         const double lo = (n0[k] - f->b[L][k]) / f->a[L][k], hi = (n1[k] - f->b[L][k]) / f->a[L][k];
         slo[k] = (int)floor(lo) - f->ghost;

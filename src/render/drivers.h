@@ -89,14 +89,16 @@ vv_status drv_render_sources(const drv_renderer *r, const vv_world *w, const vv_
  * xray, and iso only with the whole volume as the object's own): each
  * brick one region render, the partial images combined in that order
  * (over; max or min for mip and minip; the nearest crossing for iso; the
- * sums, then the mean classified, for xray). The object's own volume gives
+ * sums, then the mean classified, for xray; the maxima scaled through the
+ * exponents in front, then classified, for attenuated-mip). The object's own volume gives
  * the renderer's whole-volume context (raytrace traces shadows through it);
  * the geometry comes from the source's header. Bricks whose min/max the
  * transfer function makes transparent are skipped unread (composite), and
  * so are those wholly below the isovalue (iso); every other brick is read
  * at most once a frame. The image is the in-memory render's up to the
  * rounding of compositing (bit for bit for mip, minip and xray; iso up to
- * the gradient of a crossing just before a brick). Errors:
+ * the gradient of a crossing just before a brick; attenuated-mip up to the
+ * rounding of its products). Errors:
  * VV_ERR_UNSUPPORTED (no region method, a mode it cannot split, other
  * visible objects), VV_ERR_INVALID, those of reading and rendering.
  */
@@ -114,7 +116,8 @@ vv_status drv_render_bricks(const drv_renderer *r, const vv_world *w, int object
  * read (two for iso) -- else its eight children are, nearest first. Nodes
  * tile level 0's box exactly, so neighbours at different levels meet
  * without cracks. Each level samples at the object's step in its own
- * voxels, opacity corrected for the step's world length. A node whose
+ * voxels, opacity corrected for the step's world length (attenuated MIP's
+ * exponents weighed by it: vv_render_region.step_scale). A node whose
  * min/max the source knows and the transfer function makes transparent
  * (composite), or wholly below the isovalue (iso), is skipped unread. With
  * level 0 everywhere the image is drv_render_bricks's of level 0 (bit for

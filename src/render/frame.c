@@ -380,11 +380,6 @@ vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_
     if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "object '%s': solid textures are not rendered by regions", obj->name);
-    if (obj->mode == VV_MODE_ATTENUATED_MIP)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s': attenuated-mip is not rendered by regions (out of core, "
-                            "bricked or MPI): a sample's attenuation sums the whole ray before it",
-                            obj->name);
     *op = vv_region_op_for(obj->mode);
     return VV_OK;
 }
@@ -480,12 +475,15 @@ vv_region_image_finish(vv_region_image *img, vv_vec3 background) {
     const float bg[3] = {(float)background.x, (float)background.y, (float)background.z};
     for (size_t i = 0; i < n; i++) {
         float *pix = img->image->rgba + 4 * i;
-        if (img->op == VV_REGION_SUM) {
-            /* the mean of the pixel's samples, classified as the whole
-             * render classifies it (raycast: cast_pixel's projections) */
+        if (img->op == VV_REGION_SUM || img->op == VV_REGION_ATTENUATED_MAX) {
+            /* the mean of the pixel's samples (or its attenuated maximum),
+             * classified as the whole render classifies it (raycast:
+             * cast_pixel's projections) */
             const float k = img->key ? img->key[i] : NAN;
             float e[4] = {0, 0, 0, 0};
-            if (k == k && img->classify && pix[1] > 0)
+            if (k == k && img->classify && img->op == VV_REGION_ATTENUATED_MAX)
+                img->classify(img->classify_ctx, k, e);
+            else if (k == k && img->classify && pix[1] > 0)
                 img->classify(img->classify_ctx,
                               (float)(((double)k + (double)pix[0]) / (double)pix[1]), e);
             pix[0] = e[1] * e[0];

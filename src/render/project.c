@@ -144,8 +144,9 @@ vv_region_render_by_frame(vv_region_frame_fn frame, void *state, const vv_xray_t
     if (s != VV_OK)
         return s;
     s = frame(state, &rw.world, view, opt, region, out->image, out->key);
-    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
-    out->classify_ctx = out->op == VV_REGION_SUM ? xray : NULL;
+    const int table = out->op == VV_REGION_SUM || out->op == VV_REGION_ATTENUATED_MAX;
+    out->classify = table ? vv_xray_table_classify : NULL;
+    out->classify_ctx = table ? xray : NULL;
     return s;
 }
 
@@ -282,6 +283,58 @@ vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv
     }
     *value = best;
     *depth = (float)tbest;
+}
+
+long
+vv_vray_attenuated_region_pixel(const vv_vcache *c, const double w2i[3][4], const int dims[3],
+                                const vv_plane *planes, int n_planes, const vv_render_region *rg,
+                                double dt, int inv_form, const vv_ray *wr, const vv_vatten *a,
+                                float px[4], float *depth, float *key) {
+    px[0] = px[1] = px[2] = px[3] = 0;
+    *depth = INFINITY;
+    *key = NAN;
+    vv_vray r;
+    if (!vv_vray_setup(w2i, dims, planes, n_planes, wr, 0, INFINITY, &r) ||
+        !vv_vray_clip_region(&r, rg, dt, inv_form, NULL))
+        return 0;
+    /* a sample's exponent per unit of normalised value: k, weighed by the
+     * world length of the region's step against the finest level's */
+    const double ke = a->k * (rg->step_scale > 0 ? rg->step_scale : 1);
+    double k = vv_ceil_pos(r.t0 / dt);
+    const double kend = vv_floor_pos(r.t1 / dt);
+    /* a ray shorter than a step: its one middle sample */
+    const int one = k > kend;
+    const long n = one ? 1 : (long)(kend - k) + 1;
+    double e = 0, best = -INFINITY;
+    float tbest = INFINITY;
+    for (long j = 0; j < n; j++, k++) {
+        float v, t;
+        if (one) {
+            v = middle_sample(c, &r, &t);
+        } else {
+            float p[3];
+            t = (float)(k * dt);
+            vv_vray_point(&r, k * dt, p);
+            v = vv_vcache_sample(c, p);
+        }
+        float nv = (v - a->lo) * a->inv_range;
+        nv = nv < 0 ? 0 : nv > 1 ? 1 : nv;
+        /* the real value scaled by exp(k - E) (exactly itself when k is 0),
+         * E counting the sample itself once, as one sample of the finest
+         * level: it stands at the start of its run of step_scale of them,
+         * the first of which (the largest scale) a finer render takes */
+        const double x =
+            ((double)v + (double)a->qoff) * (a->k == 0 ? 1.0 : exp(a->k - (e + a->k * nv)));
+        if (x > best) {
+            best = x;
+            tbest = t;
+        }
+        e += ke * nv; /* the samples behind it see all of its run */
+    }
+    *key = (float)best;
+    *depth = tbest;
+    px[0] = (float)e;
+    return n;
 }
 
 double

@@ -90,7 +90,8 @@ typedef struct vv_xray_table {
 } vv_xray_table;
 
 /* vv_region_image.classify over a vv_xray_table (@p ctx): the entry of
- * value @p v (clamped to the table) into @p e. */
+ * value @p v (clamped to the table) into @p e. (The ray caster's
+ * attenuated-MIP regions use it too, its lut_lo moved to real units.) */
 void vv_xray_table_classify(const void *ctx, float v, float e[4]);
 
 /* A ray caster's frame (raycast's, gpu's render_frame): @p w through
@@ -106,8 +107,9 @@ typedef vv_status (*vv_region_frame_fn)(void *state, const vv_world *w, const vv
  * (vv_render_region_world: they carry the whole volume's geometry and
  * range, so rays stay in the whole volume's index box and only the
  * region's samples are taken); in xray mode (VV_REGION_SUM) the summed
- * means are classified by @p xray (the state's table, which the frame
- * fills). Errors: those of vv_render_region_world and @p frame. */
+ * means, and in attenuated-mip mode (VV_REGION_ATTENUATED_MAX) the
+ * attenuated maxima, are classified by @p xray (the state's table, which
+ * the frame fills). Errors: those of vv_render_region_world and @p frame. */
 vv_status vv_region_render_by_frame(vv_region_frame_fn frame, void *state,
                                     const vv_xray_table *xray, const vv_world *w,
                                     const vv_view *view, const vv_render_region *region,
@@ -181,6 +183,30 @@ typedef struct vv_vatten {
  * result). Thread-safe. */
 void vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv_vatten *a,
                             float *value, float *depth);
+
+/* A region render's attenuated-MIP pixel (VV_REGION_ATTENUATED_MAX,
+ * include/volvis/sys/renderer.h) along primary ray @p wr (world space)
+ * through the volume of cache @p c (@p w2i, @p dims, cut planes and
+ * @p inv_form as vv_vray_xray_region_pixel takes them): over the region's
+ * samples t = k dt in order (the ray's one middle sample when it is shorter
+ * than a step and the region owns it), E accumulates each sample's
+ * exponent a->k w n (n its value normalised as vv_vray_attenuated_mip
+ * normalises it, w the region's step_scale, 1 when 0), starting at 0; the
+ * sample's real value v + qoff is scaled by exp(a->k - E'), E' the E of
+ * the samples before it plus a->k n (the sample counted once, as a step of
+ * the finest level: it stands at the start of its run of w of them, whose
+ * first has the largest scale; with w = 1, E' is napari's E including the
+ * sample), and the largest scaled value (real units) is *key, the
+ * parameter of its first sample *depth, the total E in px[0] (px[1] =
+ * px[2] = px[3] = 0).
+ * Every sample is taken (the regions behind need the whole E). Nothing
+ * taken: px 0, *key NAN, *depth +inf. Returns the samples taken.
+ * Thread-safe. */
+long vv_vray_attenuated_region_pixel(const vv_vcache *c, const double w2i[3][4], const int dims[3],
+                                     const vv_plane *planes, int n_planes,
+                                     const vv_render_region *rg, double dt, int inv_form,
+                                     const vv_ray *wr, const vv_vatten *a, float px[4],
+                                     float *depth, float *key);
 
 /* The first crossing of @p iso along ray r (step dt) through the runs of
  * visible subvolumes (@p bdist of tables made for iso mode: a subvolume is

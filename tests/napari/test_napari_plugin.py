@@ -169,7 +169,7 @@ def _cli_render(frame, out_dir, name, volumes, options=("--lod", "1")):
     return ref[:, ::-1] if frame["mirror"] else ref
 
 
-@pytest.mark.parametrize("rendering", ["mip", "translucent"])
+@pytest.mark.parametrize("rendering", ["mip", "translucent", "attenuated_mip"])
 def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin, ct_vvb,
                                                 out_dir, rendering):
     from volvis.napari._widget import viewer_camera
@@ -179,6 +179,10 @@ def test_widget_matches_cli_and_follows_camera(make_napari_viewer, qtbot, plugin
     img1 = _final(qtbot, w, 0)
     f1 = dict(w.frame)
     volvis.save_png(img1, str(out_dir / ("widget_%s_1.png" % rendering)))
+    if rendering == "attenuated_mip":  # out of core too (by regions), not drawn as mip
+        (o,) = f1["world"].objects
+        assert o.mode == "attenuated-mip" and o.attenuation == pytest.approx(L.attenuation)
+        assert not f1["notes"], f1["notes"]
     ref1 = _cli_render(f1, out_dir, "widget_%s_1" % rendering, [ct_vvb])
     p1 = psnr(img1, ref1)
     assert p1 >= 40, "widget vs volvis render: %.2f dB" % p1

@@ -75,6 +75,8 @@ run_case_with(const char *renderer, const char *name, vv_volume *vol, vv_render_
     vv_status s = vv_world_new_for_volume(&w, vol, &o);
     if (s == VV_OK && ortho)
         w->view.projection = VV_PROJECTION_ORTHOGRAPHIC;
+    if (s == VV_OK && mode == VV_MODE_ATTENUATED_MIP)
+        w->objects[0]->attenuation = 0.3; /* far from MIP */
     vv_parallel_options po;
     vv_parallel_options_init(&po);
     po.method = method;
@@ -95,11 +97,12 @@ run_case_with(const char *renderer, const char *name, vv_volume *vol, vv_render_
     if (s == VV_OK)
         s = vv_parallel_render(par, w, &w->view, &ro, dist, NULL);
     if (rank == 0) {
-        const char *what = mode == VV_MODE_MIP     ? "mip"
-                           : mode == VV_MODE_MINIP ? "minip"
-                           : mode == VV_MODE_ISO   ? "iso"
-                           : mode == VV_MODE_XRAY  ? "xray"
-                                                   : "composite";
+        const char *what = mode == VV_MODE_MIP              ? "mip"
+                           : mode == VV_MODE_MINIP          ? "minip"
+                           : mode == VV_MODE_ISO            ? "iso"
+                           : mode == VV_MODE_XRAY           ? "xray"
+                           : mode == VV_MODE_ATTENUATED_MIP ? "attenuated-mip"
+                                                            : "composite";
         const char *how = method == VV_COMPOSITING_BINARY_SWAP ? "binary-swap" : "radix-k";
         if (s != VV_OK) {
             printf("FAIL %s %s %s %s np %d: %s\n", renderer, name, what, how, size,
@@ -118,12 +121,18 @@ run_case_with(const char *renderer, const char *name, vv_volume *vol, vv_render_
             vv_renderer_free(ren);
             int same = 0;
             const double db = s == VV_OK ? psnr(one, dist, &same) : 0;
-            int lit = 0; /* an isosurface (an X-ray image) that is there */
-            const float seen = mode == VV_MODE_XRAY ? 0.02f : 0.5f;
+            int lit = 0; /* an isosurface (an X-ray, attenuated-MIP image) that is there */
+            const float seen =
+                mode == VV_MODE_XRAY || mode == VV_MODE_ATTENUATED_MIP ? 0.02f : 0.5f;
             for (size_t i = 0; s == VV_OK && i < (size_t)one->width * one->height; i++)
                 lit += one->rgba[4 * i + 3] > seen;
-            const int ok = s == VV_OK && (mode == VV_MODE_COMPOSITE ? db >= 50 : same) &&
-                           ((mode != VV_MODE_ISO && mode != VV_MODE_XRAY) || lit > 200);
+            /* attenuated MIP: the ranks' maxima scaled through the exponents in
+             * front of them, up to the rounding of the products */
+            const int ok =
+                s == VV_OK &&
+                (mode == VV_MODE_COMPOSITE || mode == VV_MODE_ATTENUATED_MIP ? db >= 50 : same) &&
+                ((mode != VV_MODE_ISO && mode != VV_MODE_XRAY && mode != VV_MODE_ATTENUATED_MIP) ||
+                 lit > 200);
             printf("%s %s %s %s %s%s np %d: %s, %.1f dB, %d pixels seen\n", ok ? "ok" : "FAIL",
                    renderer, name, what, how, ortho ? " ortho" : "", size,
                    same ? "bit-identical" : "differs", db, lit);
@@ -193,6 +202,10 @@ main(int argc, char **argv) {
     /* X-ray: the ranks' sums and counts add up, rank 0 classifies the means */
     run_case("synthetic", syn, VV_MODE_XRAY, 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
     run_case("synthetic", syn, VV_MODE_XRAY, 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);
+    /* attenuated MIP: each rank's maxima and exponent sums, combined front
+     * to back through the exponents in front (VV_REGION_ATTENUATED_MAX) */
+    run_case("synthetic", syn, VV_MODE_ATTENUATED_MIP, 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
+    run_case("synthetic", syn, VV_MODE_ATTENUATED_MIP, 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);
     if (argc > 1) {
         char path[4096];
         snprintf(path, sizeof path, "%s/volumes/ct_head.nrrd", argv[1]);
@@ -202,6 +215,8 @@ main(int argc, char **argv) {
             run_case("ct_head", head, VV_MODE_MIP, 200, 15, 0, VV_COMPOSITING_RADIX_K, 3);
             run_case("ct_head", head, VV_MODE_ISO, 200, 15, 0, VV_COMPOSITING_RADIX_K, 3);
             run_case("ct_head", head, VV_MODE_XRAY, 200, 15, 0, VV_COMPOSITING_BINARY_SWAP, 4);
+            run_case("ct_head", head, VV_MODE_ATTENUATED_MIP, 200, 15, 0, VV_COMPOSITING_RADIX_K,
+                     3);
             run_case_with("raytrace", "ct_head", head, VV_MODE_COMPOSITE, 200, 15, 0,
                           VV_COMPOSITING_BINARY_SWAP, 4);
             run_case_with("raytrace", "ct_head", head, VV_MODE_MIP, 200, 15, 0,

@@ -740,6 +740,49 @@ test_region_ops(void **state) {
     float z[4] = {0, 0, 0, 0}, zd = INFINITY, zk = NAN;
     vv_region_pixel_combine(VV_REGION_MIN, z, &zd, &zk, n, 4, 3); /* nothing in front */
     assert_true(zk == 3 && zd == 4 && z[0] == 2);
+    /* attenuated max, napari's formula on one ray of three samples, values
+     * 50, 200, 120 (real), normalised 0.25, 1, 0.6, k = 0.5: the whole ray's
+     * maximum of v exp(k - E) against the front sample alone combined with
+     * the back two, and the back two split again (associativity) */
+    const double k = 0.5, v[3] = {50, 200, 120}, nv[3] = {0.25, 1, 0.6};
+    double E = 0, want = -INFINITY;
+    int at = -1;
+    for (int i = 0; i < 3; i++) {
+        E += k * nv[i];
+        const double x = v[i] * exp(k - E);
+        if (x > want) {
+            want = x;
+            at = i;
+        }
+    }
+    float parts[3][4], pd[3], pk[3];
+    for (int i = 0; i < 3; i++) { /* each sample a region of its own */
+        parts[i][0] = (float)(k * nv[i]);
+        parts[i][1] = parts[i][2] = parts[i][3] = 0;
+        pd[i] = (float)(10 + i);
+        pk[i] = (float)(v[i] * exp(k - k * nv[i]));
+    }
+    /* ((0, 1), 2) and (0, (1, 2)) */
+    float a[4], ad = pd[0], ak = pk[0], c[4], cd = pd[1], ck = pk[1];
+    memcpy(a, parts[0], sizeof a);
+    memcpy(c, parts[1], sizeof c);
+    vv_region_pixel_combine(VV_REGION_ATTENUATED_MAX, a, &ad, &ak, parts[1], pd[1], pk[1]);
+    vv_region_pixel_combine(VV_REGION_ATTENUATED_MAX, a, &ad, &ak, parts[2], pd[2], pk[2]);
+    vv_region_pixel_combine(VV_REGION_ATTENUATED_MAX, c, &cd, &ck, parts[2], pd[2], pk[2]);
+    float g[4], gd = pd[0], gk = pk[0];
+    memcpy(g, parts[0], sizeof g);
+    vv_region_pixel_combine(VV_REGION_ATTENUATED_MAX, g, &gd, &gk, c, cd, ck);
+    assert_int_equal(at, 1); /* the bright middle sample wins, scaled */
+    assert_true(fabs(ak - want) < 1e-4 * want && fabs(gk - want) < 1e-4 * want);
+    assert_true(ad == 11 && gd == 11);
+    assert_true(fabsf(a[0] - (float)E) < 1e-6f && fabsf(g[0] - (float)E) < 1e-6f);
+    /* nothing behind, or nothing in front */
+    float h[4] = {0.3f, 0, 0, 0}, hd = 2, hk = 7;
+    vv_region_pixel_combine(VV_REGION_ATTENUATED_MAX, h, &hd, &hk, z, 1, NAN);
+    assert_true(hk == 7 && hd == 2 && h[0] == 0.3f);
+    float e0[4] = {0, 0, 0, 0}, ed = INFINITY, ek = NAN;
+    vv_region_pixel_combine(VV_REGION_ATTENUATED_MAX, e0, &ed, &ek, h, hd, hk);
+    assert_true(ek == 7 && ed == 2 && e0[0] == 0.3f);
 }
 
 /* vv_renderer_ops.stand_in: a method that names another draws the frame

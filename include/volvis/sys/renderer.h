@@ -64,7 +64,16 @@ extern "C" {
  * the values of its samples and counts them; the sums add up, and the mean
  * is classified once at the end (vv_region_image_finish, through the
  * image's classify), so the image is the whole render's up to the
- * rounding of adding the sums in another order.
+ * rounding of adding the sums in another order. ATTENUATED_MAX (napari's
+ * attenuated MIP): the operator is associative. With E the running sum of
+ * the per-sample exponents k n (n a sample's value normalised by the
+ * contrast limits, k the attenuation per step), the whole render's pixel
+ * value is the maximum over samples of (v + qoff) exp(k - E), E including
+ * the sample. A region starts its E at 0 and gives its local maximum m and
+ * its total E; front F over back B is m = max(m_F, m_B exp(-E_F)), E =
+ * E_F + E_B, since exp(k - E_F - E_B) = exp(-E_F) exp(k - E_B). The final m
+ * is classified once at the end as SUM's mean is, so the image is the whole
+ * render's up to the rounding of the products (>= 50 dB; tests).
  */
 typedef enum vv_region_op {
     VV_REGION_OVER = 0,    /**< composite: premultiplied colour and opacity, Porter-Duff over;
@@ -77,6 +86,10 @@ typedef enum vv_region_op {
     VV_REGION_SUM = 4,     /**< X-ray: the sums of the sample values add up (a partial pixel
                                 holds no colour until vv_region_image_finish; see
                                 vv_region_image.key) */
+    VV_REGION_ATTENUATED_MAX = 5, /**< attenuated MIP: the maximum of the back's values scaled
+                                       by exp(-E) of the front, the exponents E add up (a
+                                       partial pixel holds no colour until
+                                       vv_region_image_finish; see vv_region_image.key) */
 } vv_region_op;
 
 /**
@@ -180,6 +193,16 @@ typedef struct vv_render_region {
      */
     const vv_volume *from;
     int level; /**< the pyramid level of `from` (0: the finest, or a volume of one level) */
+    /**
+     * The world length of a sample step in this region's voxels over its
+     * length at the finest level the frame's regions come from (a pyramid
+     * level L against level 0: level L's smallest voxel size over level
+     * 0's, about 2^L), > 0; 0 (an initializer's default): 1. What sums a
+     * quantity per sample along the ray weighs each sample by it, so that
+     * nodes of different levels in one frame sum it per world length
+     * alike (attenuated MIP's exponents, VV_REGION_ATTENUATED_MAX).
+     */
+    double step_scale;
 } vv_render_region;
 
 /** A region render's output: the partial image and how it combines. */
@@ -201,6 +224,11 @@ typedef struct vv_region_image {
      * remainder s - key in the pixel's red, the number of samples in its
      * green (blue and opacity 0), depth the whole ray's entry in the region
      * holding its first sample (else INFINITY); NAN where none.
+     * ATTENUATED_MAX: the region's largest attenuated value m (real data
+     * units, value + qoff, not stored units: the scale multiplies the real
+     * value) as key, the sum E of its samples' exponents (dimensionless,
+     * >= 0) in the pixel's red (green, blue and opacity 0), depth that of
+     * the sample of m (the first of equals); NAN where none.
      */
     float *key;
     vv_region_op op; /**< set by the renderer */
@@ -212,8 +240,9 @@ typedef struct vv_region_image {
      */
     int clear_outside;
     /**
-     * SUM: set by the renderer's region render: the colour {opacity, r, g,
-     * b} (not premultiplied) that its whole render gives the mean value
+     * SUM and ATTENUATED_MAX: set by the renderer's region render: the
+     * colour {opacity, r, g, b} (not premultiplied) that its whole render
+     * gives the mean value (SUM) or the attenuated maximum (ATTENUATED_MAX)
      * @p v (key units), for vv_region_image_finish; @p ctx is
      * classify_ctx, owned by the renderer and valid until its next render
      * or its destruction. NULL otherwise (an initializer's default).
@@ -240,14 +269,16 @@ typedef struct vv_region_image {
 /** How the region renders of an object in @p mode combine. */
 static inline vv_region_op
 vv_region_op_for(vv_render_mode mode) {
-    return mode == VV_MODE_MIP     ? VV_REGION_MAX
-           : mode == VV_MODE_MINIP ? VV_REGION_MIN
-           : mode == VV_MODE_ISO   ? VV_REGION_NEAREST
-           : mode == VV_MODE_XRAY  ? VV_REGION_SUM
-                                   : VV_REGION_OVER;
+    return mode == VV_MODE_MIP              ? VV_REGION_MAX
+           : mode == VV_MODE_MINIP          ? VV_REGION_MIN
+           : mode == VV_MODE_ISO            ? VV_REGION_NEAREST
+           : mode == VV_MODE_XRAY           ? VV_REGION_SUM
+           : mode == VV_MODE_ATTENUATED_MIP ? VV_REGION_ATTENUATED_MAX
+                                            : VV_REGION_OVER;
 }
 
-/** Combines one pixel: @p f (front, updated) and @p b (behind). */
+/** Combines one pixel: @p f (front, updated) and @p b (behind), colour, depth and key as
+ *  vv_region_image holds them for @p op. */
 static inline void
 vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey, const float b[4],
                         float bdepth, float bkey) {
@@ -273,6 +304,16 @@ vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey,
     }
     if (bkey != bkey) /* behind took no sample */
         return;
+    if (op == VV_REGION_ATTENUATED_MAX && *fkey == *fkey) {
+        /* the back's values seen through the front's exponents */
+        const float m = (float)((double)bkey * exp(-(double)f[0]));
+        if (m > *fkey) {
+            *fkey = m;
+            *fdepth = bdepth;
+        }
+        f[0] += b[0];
+        return;
+    }
     if (op == VV_REGION_SUM && *fkey == *fkey) {
         /* the sums, each kept as a float and its remainder */
         const double sum = ((double)*fkey + (double)f[0]) + ((double)bkey + (double)b[0]);
@@ -299,7 +340,8 @@ vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey,
  * render writes a pixel). SUM: each pixel's colour is first its mean
  * (key + red) / green, classified by img->classify (opacity times colour,
  * and the opacity; a pixel without samples or an image without classify
- * is transparent).
+ * is transparent). ATTENUATED_MAX: each pixel's colour is its key
+ * classified the same way.
  */
 void vv_region_image_finish(vv_region_image *img, vv_vec3 background);
 

@@ -17,11 +17,12 @@ What it maps (napari -> VolVis, each layer one volume object of a World):
   attenuated_mip -> attenuated-mip (napari's method: the maximum of the
   sample values scaled by exp(-attenuation (S - 1) / step), S the running
   sum of the contrast-normalised values) with the layer's ``attenuation``
-  at VisPy's relative step 0.8 (the step napari's exponent divides by); a
-  layer drawn out of core (opened by the VolVis reader) is rendered by
-  regions, which cannot carry the sum along the ray, so there it is drawn
-  as mip, and so it is with shadows (the ray tracer draws no attenuated
-  MIP; both said in the status line); additive -> composite.
+  at VisPy's relative step 0.8 (the step napari's exponent divides by),
+  also for a layer drawn out of core (opened by the VolVis reader), whose
+  nodes render by regions: each carries its own part of the sum, and the
+  nodes combine front to back (docs/rendering.md, "Attenuated MIP"); with
+  shadows it is drawn as mip (the ray tracer draws no attenuated MIP; said
+  in the status line); additive -> composite.
 - colormap, contrast limits, gamma, opacity: a transfer function of up to
   130 points over the contrast limits (even in t and in t^gamma), colour ``colormap((t)^gamma)`` at data
   value ``lo + t (hi - lo)``; opacity there ``opacity * t^gamma`` per voxel
@@ -225,10 +226,7 @@ def layer_object(layer, cache=None):
         spacing = scale
     mode, tf, iso_rgb, rendering = layer_tf(layer, float(np.min(spacing)))
     note = ""
-    if mode == "attenuated-mip" and pyr is not None:
-        mode = "mip"
-        note = "attenuated_mip of an out-of-core layer drawn as mip"
-    elif mode == "attenuated-mip":
+    if mode == "attenuated-mip":
         obj.attenuation = float(getattr(layer, "attenuation", 0.05))
         obj.step = NAPARI_RELATIVE_STEP
     obj.mode = mode

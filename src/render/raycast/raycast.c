@@ -66,7 +66,8 @@ typedef struct rc_state {
     int shading_table;               /* option shading: 0 phong, 1 table */
     vv_vshade_table stab;            /* the last frame's shading table (shading=table) */
     /* the X-ray table of the last region render in xray mode, which
-     * classifies the summed regions' means (vv_region_image.classify) */
+     * classifies the summed regions' means (vv_region_image.classify), or
+     * in attenuated-mip mode their attenuated maxima */
     vv_xray_table xray;
 } rc_state;
 
@@ -132,6 +133,8 @@ typedef struct rc_frame {
     float tolerance;    /* its tolerance, in colour and opacity */
     int preint;         /* pre-integrated classification (trace_composite_preint) */
     int xsum;           /* a region render in xray mode: sums and counts (VV_REGION_SUM) */
+    int asum;           /* a region render in attenuated-mip mode: maxima and exponents
+                           (VV_REGION_ATTENUATED_MAX) */
 } rc_frame;
 
 /* ---------------------------------------------------------------------- */
@@ -1140,14 +1143,31 @@ xray_sum_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
         fr->avx2, fr->out->rgba + 4 * at, &fr->out->depth[at], &fr->key[at]);
 }
 
+/* A region render in attenuated-mip mode: pixel (x, y)'s largest
+ * attenuated value of the region's samples (real units) and the sum of
+ * their exponents (vv_region_image.key, VV_REGION_ATTENUATED_MAX). */
+static void
+attenuated_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
+    const rc_obj *ob = &fr->objs[0];
+    const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
+    const size_t at = (size_t)y * (size_t)fr->out->width + (size_t)x;
+    work->samples += (uint64_t)vv_vray_attenuated_region_pixel(
+        ob->c, ob->w2i, ob->dims, ob->planes, ob->n_planes, ob->region, fr->dt, ob->inv_form, &wr,
+        &ob->att, fr->out->rgba + 4 * at, &fr->out->depth[at], &fr->key[at]);
+}
+
 static vv_status
 render_tile(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
     vv_render_stats work = {0};
-    if (fr->xsum) {
+    if (fr->xsum || fr->asum) {
         for (int y = t->y0; y < t->y1; y++)
-            for (int x = t->x0; x < t->x1; x++)
-                xray_sum_pixel(fr, x, y, &work);
+            for (int x = t->x0; x < t->x1; x++) {
+                if (fr->xsum)
+                    xray_sum_pixel(fr, x, y, &work);
+                else
+                    attenuated_pixel(fr, x, y, &work);
+            }
         tile_stats(fr, &work);
         return VV_OK;
     }
@@ -1317,13 +1337,15 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
         }
     }
     fr.xsum = region && fr.n_obj == 1 && objs[0].mode == VV_MODE_XRAY;
-    if (s == VV_OK && fr.xsum && objs[0].nch)
+    fr.asum = region && fr.n_obj == 1 && objs[0].mode == VV_MODE_ATTENUATED_MIP;
+    if (s == VV_OK && (fr.xsum || fr.asum) && objs[0].nch)
         s = vv_error_set(VV_ERR_UNSUPPORTED,
-                         "object '%s': xray regions of a multi-channel object are not rendered",
-                         objs[0].obj->name);
-    if (s == VV_OK && fr.xsum) {
-        /* the table that classifies the summed means (vv_xray_table_classify) */
-        st->xray.lut_lo = objs[0].lut_lo;
+                         "object '%s': %s regions of a multi-channel object are not rendered",
+                         objs[0].obj->name, fr.xsum ? "xray" : "attenuated-mip");
+    if (s == VV_OK && (fr.xsum || fr.asum)) {
+        /* the table that classifies the summed means (vv_xray_table_classify),
+         * or the attenuated maxima, whose keys are real values (value + qoff) */
+        st->xray.lut_lo = objs[0].lut_lo + (fr.asum ? (float)objs[0].c->qoff : 0.0f);
         st->xray.lut_scale = objs[0].lut_scale;
         memcpy(st->xray.lut, objs[0].lut, sizeof st->xray.lut);
     }
