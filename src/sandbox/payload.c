@@ -61,16 +61,22 @@ sbx_madvise_parallel(void *p, size_t len, int advice) {
 }
 
 /*
- * The parent's one pass over a volume's mapping [@p p, @p p + @p bytes):
- * each 8 MiB piece populated (MADV_POPULATE_READ) and its voxels of type
- * @p type measured into @p range (vv_range_accumulate) on the same
- * thread, the pieces on the library's threads: the range it trusts no
- * reader for, at the cost of one parallel pass instead of two.
+ * [@p p, @p p + @p bytes) in pieces of @p piece bytes (a multiple of the
+ * voxel size) on the library's threads: each piece first taken by
+ * @p take (0, or an errno: the first one returned, and the other pieces
+ * stop taking), then its voxels of type @p type measured into @p range
+ * (vv_range_accumulate) on the same thread, while the piece is in its
+ * core's cache. The parent's one pass over a volume it got from a reader:
+ * the range it trusts no reader for, in the pass that makes the voxels
+ * its own.
  */
-static void
-populate_and_range(void *p, size_t bytes, vv_voxel_type type, double range[2]) {
-    const size_t piece = (size_t)8 << 20, es = vv_voxel_type_size(type);
+static int
+take_and_range(unsigned char *p, size_t bytes, size_t piece, vv_voxel_type type,
+               int (*take)(void *ctx, unsigned char *at, size_t off, size_t len), void *ctx,
+               double range[2]) {
+    const size_t es = vv_voxel_type_size(type);
     const int64_t n = (int64_t)((bytes + piece - 1) / piece);
+    _Atomic int failed = 0;
     range[0] = INFINITY;
     range[1] = -INFINITY;
 #pragma omp parallel if (n > 1)
@@ -79,8 +85,12 @@ populate_and_range(void *p, size_t bytes, vv_voxel_type type, double range[2]) {
 #pragma omp for schedule(static)
         for (int64_t i = 0; i < n; i++) {
             const size_t off = (size_t)i * piece, len = bytes - off < piece ? bytes - off : piece;
-            (void)madvise((char *)p + off, len, MADV_POPULATE_READ);
-            vv_range_accumulate(type, (const char *)p + off, len / es, mine);
+            int e = atomic_load(&failed) ? -1 : take(ctx, p + off, off, len);
+            if (e > 0) {
+                int none = 0;
+                atomic_compare_exchange_strong(&failed, &none, e);
+            } else if (e == 0)
+                vv_range_accumulate(type, p + off, len / es, mine);
         }
 #pragma omp critical(sbx_volume_range)
         {
@@ -88,6 +98,18 @@ populate_and_range(void *p, size_t bytes, vv_voxel_type type, double range[2]) {
             range[1] = mine[1] > range[1] ? mine[1] : range[1];
         }
     }
+    return atomic_load(&failed);
+}
+
+/* take_and_range's take of a mapping of the reader's memfd: the piece's
+ * pages populated (MADV_POPULATE_READ; refused before Linux 5.14: then
+ * faulted as they are read). */
+static int
+populate_piece(void *ctx, unsigned char *at, size_t off, size_t len) {
+    (void)ctx;
+    (void)off;
+    (void)madvise(at, len, MADV_POPULATE_READ);
+    return 0;
 }
 
 /* ---- the reader ----------------------------------------------------------------- */
@@ -344,7 +366,8 @@ sbx_volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *f
     close(fd);
     double range[2] = {0, 0};
     if (p != MAP_FAILED && bytes)
-        populate_and_range(p, (size_t)bytes, (vv_voxel_type)r->type, range);
+        (void)take_and_range(p, (size_t)bytes, (size_t)8 << 20, (vv_voxel_type)r->type,
+                             populate_piece, NULL, range);
     if (p == MAP_FAILED)
         return vv_error_set(VV_ERR_NOMEM, "%s: %s: cannot map the reader's %llu bytes: %s",
                             fmt_name, file, (unsigned long long)bytes, strerror(e));
@@ -361,48 +384,28 @@ sbx_volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *f
     return VV_OK;
 }
 
-/* Copies [r->addr, r->addr + bytes) of reader @p peer into @p dst in 4 MiB
- * pieces on the library's threads, each piece's voxels measured into
- * @p range as it lands (in this core's cache). 0, or the errno of the
- * first piece that could not be read whole. */
+/* take_and_range's take of a piece of a peek reply's voxels: copied out
+ * of the reader (process_vm_readv, which may copy less than asked at a
+ * time). */
+typedef struct peer_copy {
+    pid_t peer;
+    uint64_t addr;
+} peer_copy;
+
 static int
-copy_from_peer(unsigned char *dst, uint64_t addr, size_t bytes, pid_t peer, vv_voxel_type type,
-               double range[2]) {
-    const size_t piece = (size_t)4 << 20, es = vv_voxel_type_size(type);
-    const int64_t n = (int64_t)((bytes + piece - 1) / piece);
-    _Atomic int failed = 0;
-    range[0] = INFINITY;
-    range[1] = -INFINITY;
-#pragma omp parallel if (n > 1)
-    {
-        double mine[2] = {INFINITY, -INFINITY};
-#pragma omp for schedule(static)
-        for (int64_t i = 0; i < n; i++) {
-            const size_t off = (size_t)i * piece, len = bytes - off < piece ? bytes - off : piece;
-            size_t got = 0;
-            while (got < len && !atomic_load(&failed)) {
-                struct iovec here = {dst + off + got, len - got};
-                struct iovec there = {(void *)(uintptr_t)(addr + off + got), len - got};
-                const ssize_t k = process_vm_readv(peer, &here, 1, &there, 1, 0);
-                if (k < 0 && errno == EINTR)
-                    continue;
-                if (k <= 0) {
-                    int none = 0, e = k < 0 ? errno : EFAULT;
-                    atomic_compare_exchange_strong(&failed, &none, e ? e : EFAULT);
-                    break;
-                }
-                got += (size_t)k;
-            }
-            if (got == len)
-                vv_range_accumulate(type, dst + off, len / es, mine);
-        }
-#pragma omp critical(sbx_volume_range)
-        {
-            range[0] = mine[0] < range[0] ? mine[0] : range[0];
-            range[1] = mine[1] > range[1] ? mine[1] : range[1];
-        }
+copy_piece(void *ctx, unsigned char *at, size_t off, size_t len) {
+    const peer_copy *c = ctx;
+    for (size_t got = 0; got < len;) {
+        struct iovec here = {at + got, len - got};
+        struct iovec there = {(void *)(uintptr_t)(c->addr + off + got), len - got};
+        const ssize_t k = process_vm_readv(c->peer, &here, 1, &there, 1, 0);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return k < 0 && errno ? errno : EFAULT;
+        got += (size_t)k;
     }
-    return atomic_load(&failed);
+    return 0;
 }
 
 vv_status
@@ -427,7 +430,9 @@ sbx_volume_from_peer(vv_volume **out, const sbx_reply *r, pid_t peer, const char
     if ((s = vv_volume_new(&v, r->dims, (vv_voxel_type)r->type)) != VV_OK)
         return s;
     double range[2];
-    const int e = copy_from_peer(v->data, r->addr, (size_t)bytes, peer, v->type, range);
+    peer_copy pc = {peer, r->addr};
+    const int e =
+        take_and_range(v->data, (size_t)bytes, (size_t)4 << 20, v->type, copy_piece, &pc, range);
     if (e) {
         vv_volume_free(v);
         return vv_error_set(VV_ERR_FORMAT,
