@@ -145,7 +145,7 @@ sbx_spawn_reader(const char *exe, pid_t *pid, int *sock) {
     size_t ne = 0;
     while (environ[ne])
         ne++;
-    char **env = calloc(ne + 2, sizeof *env);
+    char **env = calloc(ne + 3, sizeof *env);
     char *tunables = NULL;
     const char *old = getenv("GLIBC_TUNABLES");
     if (env && asprintf(&tunables, "GLIBC_TUNABLES=%s%sglibc.malloc.hugetlb=1", old ? old : "",
@@ -157,6 +157,12 @@ sbx_spawn_reader(const char *exe, pid_t *pid, int *sock) {
             env[k++] = environ[i];
     if (env && tunables)
         env[k++] = tunables;
+    /* its OpenMP threads sleep once their work is done, not spin: a
+     * volume's reader lives on while this process copies its voxels out
+     * (peek), and spinning threads would take the cores the copy runs on
+     * (the caller's own OMP_WAIT_POLICY kept) */
+    if (env && !getenv("OMP_WAIT_POLICY"))
+        env[k++] = (char *)"OMP_WAIT_POLICY=PASSIVE";
     int err = sv[1] < 0 ? errno : posix_spawn(pid, exe, &fa, &at, args, env ? env : environ);
     free(tunables);
     free(env);
