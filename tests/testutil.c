@@ -367,3 +367,22 @@ vt_expect_refusal(const char *label, vv_status got, vv_status want, const char *
         if (*c < 0x20 || *c == 0x7f)
             fail_msg("%s: message '%s' is not one printable line (byte 0x%02x)", l, msg, *c);
 }
+
+vv_image *
+vt_render_reference(vv_world *w) {
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raycast"));
+    vt_ok(vv_renderer_set_option(r, "refinement", "off"));
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, w->view.width, w->view.height));
+    vt_ok(vv_renderer_render(r, w, &w->view, NULL, img));
+    vv_renderer_free(r);
+    return img;
+}
+
+void
+vt_save_png(const vv_image *img, const char *dir, const char *prefix, const char *name) {
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s%s.png", dir, prefix, name);
+    vt_ok(vv_image_write_png(img, path, 1.0, 0));
+}

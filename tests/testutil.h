@@ -96,6 +96,16 @@ void vt_write_file(const char *path, const void *data, size_t n);
 vv_status vt_save(const vv_volume *v, const char *path, vv_format format, int compress,
                   unsigned vvb_flags);
 
+/**
+ * The in-memory ray-cast render of @p w at its view, every pixel cast (the
+ * adaptive refinement off): the reference a test compares other roads
+ * with. The caller frees the image; fails the test on error.
+ */
+vv_image *vt_render_reference(vv_world *w);
+
+/** Writes @p img to @p dir/@p prefix@p name.png (gamma 1); fails the test on error. */
+void vt_save_png(const vv_image *img, const char *dir, const char *prefix, const char *name);
+
 /** Reads a whole file (malloc'ed, caller frees); fails the test on error. */
 unsigned char *vt_read_file(const char *path, size_t *n);
 

@@ -59,28 +59,6 @@ two_heads(vv_volume *head, vv_render_mode m0, vv_render_mode m1, double dx) {
     return w;
 }
 
-static void
-save(const vv_image *img, const char *name) {
-    char path[1200];
-    snprintf(path, sizeof path, "%s/sources_%s.png", outdir(), name);
-    vt_ok(vv_image_write_png(img, path, 1.0, 0));
-}
-
-/* The in-memory render of @p w, every pixel cast. */
-static vv_image *
-reference(vv_world *w) {
-    vv_renderer *r = NULL;
-    vt_ok(vv_renderer_new(&r, "raycast"));
-    vt_ok(vv_renderer_set_option(r, "refinement", "off"));
-    vv_render_options ro;
-    vv_render_options_init(&ro);
-    vv_image *img = NULL;
-    vt_ok(vv_image_new(&img, w->view.width, w->view.height));
-    vt_ok(vv_renderer_render(r, w, &w->view, &ro, img));
-    vv_renderer_free(r);
-    return img;
-}
-
 /* @p w drawn by the one render call with level 0 everywhere; the objects
  * hold their sources (attach). */
 static vv_status
@@ -162,7 +140,7 @@ test_two_heads(void **state) {
     for (size_t pi = 0; pi < sizeof pairs / sizeof pairs[0]; pi++)
         for (int right_in_memory = 0; right_in_memory < 2; right_in_memory++) {
             vv_world *w = two_heads(head, pairs[pi][0], pairs[pi][1], 1.1);
-            vv_image *ref = reference(w);
+            vv_image *ref = vt_render_reference(w);
             attach(w, 0, bricks);
             attach(w, 1, right_in_memory ? NULL : levels);
             vv_source_stats before, after;
@@ -190,10 +168,10 @@ test_two_heads(void **state) {
                 char name[64];
                 snprintf(name, sizeof name, "%s_%s", mode_name(pairs[pi][0]),
                          mode_name(pairs[pi][1]));
-                save(img, name);
+                vt_save_png(img, outdir(), "sources_", name);
                 snprintf(name, sizeof name, "%s_%s_memory", mode_name(pairs[pi][0]),
                          mode_name(pairs[pi][1]));
-                save(ref, name);
+                vt_save_png(ref, outdir(), "sources_", name);
             }
             vv_image_free(img);
             vv_image_free(ref);
@@ -203,7 +181,7 @@ test_two_heads(void **state) {
     /* overlapping projections combine by the maximum: bit for bit */
     {
         vv_world *w = two_heads(head, VV_MODE_MIP, VV_MODE_MIP, 0.5);
-        vv_image *ref = reference(w);
+        vv_image *ref = vt_render_reference(w);
         attach(w, 0, bricks);
         attach(w, 1, levels);
         vv_image *img = NULL;
@@ -211,7 +189,7 @@ test_two_heads(void **state) {
         int same = 0;
         vt_image_psnr(ref, img, &same);
         assert_true(same);
-        save(img, "mip_overlapping");
+        vt_save_png(img, outdir(), "sources_", "mip_overlapping");
         vv_image_free(img);
         vv_image_free(ref);
         vv_world_free(w);

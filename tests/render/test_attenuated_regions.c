@@ -50,26 +50,6 @@ head_world(vv_volume *head, vv_render_mode mode, double att) {
     return w;
 }
 
-static void
-save(const vv_image *img, const char *name) {
-    char path[1200];
-    snprintf(path, sizeof path, "%s/att_%s.png", outdir(), name);
-    vt_ok(vv_image_write_png(img, path, 1.0, 0));
-}
-
-/* The in-memory render of @p w, every pixel cast. */
-static vv_image *
-reference(vv_world *w) {
-    vv_renderer *r = NULL;
-    vt_ok(vv_renderer_new(&r, "raycast"));
-    vt_ok(vv_renderer_set_option(r, "refinement", "off"));
-    vv_image *img = NULL;
-    vt_ok(vv_image_new(&img, w->view.width, w->view.height));
-    vt_ok(vv_renderer_render(r, w, &w->view, NULL, img));
-    vv_renderer_free(r);
-    return img;
-}
-
 /* head_world(@p head, attenuated MIP, @p att), its object holding @p src,
  * by the one render call, at level @p level (-1: chosen per node, a voxel
  * at most @p voxel_pixels pixels); lod->nodes counts the nodes of each
@@ -142,13 +122,13 @@ test_bricks_and_levels(void **state) {
 
     /* plain MIP, for attenuation 0 and to show the strong one differs */
     vv_world *wm = head_world(head, VV_MODE_MIP, 0);
-    vv_image *mip = reference(wm);
+    vv_image *mip = vt_render_reference(wm);
     vv_world_free(wm);
-    save(mip, "mip_memory");
+    vt_save_png(mip, outdir(), "att_", "mip_memory");
     const double atts[3] = {0, 0.05, 1.0};
     for (int a = 0; a < 3; a++) {
         vv_world *w = head_world(head, VV_MODE_ATTENUATED_MIP, atts[a]);
-        vv_image *ref = reference(w);
+        vv_image *ref = vt_render_reference(w);
         vv_lod lod;
         vv_image *ib = render_source(head, atts[a], bricks, 0, 1, &lod);
         vv_image *il = render_source(head, atts[a], levels, 0, 1, &lod);
@@ -163,11 +143,11 @@ test_bricks_and_levels(void **state) {
                atts[a], db_b, lod.nodes[0], db_l, db_mip, db_bmip, lit_pixels(ib));
         char name[64];
         snprintf(name, sizeof name, "%.2f_memory", atts[a]);
-        save(ref, name);
+        vt_save_png(ref, outdir(), "att_", name);
         snprintf(name, sizeof name, "%.2f_bricks", atts[a]);
-        save(ib, name);
+        vt_save_png(ib, outdir(), "att_", name);
         snprintf(name, sizeof name, "%.2f_levels", atts[a]);
-        save(il, name);
+        vt_save_png(il, outdir(), "att_", name);
         assert_true(db_b >= 50 && db_l >= 50);
         assert_true(lit_pixels(ib) > 1000);
         if (atts[a] == 0) {
@@ -195,7 +175,7 @@ test_bricks_and_levels(void **state) {
         vv_world *wl = head_world(vl, VV_MODE_ATTENUATED_MIP, 0.2 / (1 << L));
         wl->objects[0]->step = 0.5 / (1 << L);
         wl->view = w0->view;
-        vv_image *ref0 = reference(w0), *refl = reference(wl);
+        vv_image *ref0 = vt_render_reference(w0), *refl = vt_render_reference(wl);
         vv_lod lod;
         vv_image *il = render_source(head, 0.2, levels, L, 1, &lod);
         assert_true(lod.nodes[L] > 0 && lod.nodes[0] == 0);
@@ -208,9 +188,9 @@ test_bricks_and_levels(void **state) {
                L, lod.nodes[L], db, L, db0, L, dbl0);
         char name[64];
         snprintf(name, sizeof name, "0.20_level%d", L);
-        save(il, name);
+        vt_save_png(il, outdir(), "att_", name);
         snprintf(name, sizeof name, "0.20_level%d_memory", L);
-        save(refl, name);
+        vt_save_png(refl, outdir(), "att_", name);
         assert_true(db >= 35);
         vv_image_free(ref0);
         vv_image_free(refl);
