@@ -386,3 +386,18 @@ vt_save_png(const vv_image *img, const char *dir, const char *prefix, const char
     snprintf(path, sizeof path, "%s/%s%s.png", dir, prefix, name);
     vt_ok(vv_image_write_png(img, path, 1.0, 0));
 }
+
+vv_source *
+vt_open_ooc(const char *path, int levels, vv_cache *cache) {
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE;
+    oo.levels = levels;
+    oo.cache = cache;
+    vv_opened od;
+    vt_ok(vv_open(&od, path, &oo));
+    assert_int_equal(vv_source_get_kind(od.source), levels ? VV_SOURCE_PYRAMID : VV_SOURCE_BRICKS);
+    vv_source *s = vv_source_ref(od.source);
+    vv_opened_clear(&od);
+    return s;
+}

@@ -103,6 +103,13 @@ vv_status vt_save(const vv_volume *v, const char *path, vv_format format, int co
  */
 vv_image *vt_render_reference(vv_world *w);
 
+/**
+ * @p path opened out of core (vv_open, VV_OPEN_OUT_OF_CORE) in @p cache, by
+ * its levels when @p levels (then a pyramid, else bricks: the test fails
+ * otherwise). A new source reference; fails the test on error.
+ */
+vv_source *vt_open_ooc(const char *path, int levels, vv_cache *cache);
+
 /** Writes @p img to @p dir/@p prefix@p name.png (gamma 1); fails the test on error. */
 void vt_save_png(const vv_image *img, const char *dir, const char *prefix, const char *name);
 

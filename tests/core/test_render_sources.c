@@ -85,22 +85,6 @@ attach(vv_world *w, int i, vv_source *src) {
         vt_ok(vv_object_attach_source(w->objects[i], src, 0));
 }
 
-/* @p path opened out of core in @p cache, by its levels when @p levels. */
-static vv_source *
-open_ooc(const char *path, int levels, vv_cache *cache) {
-    vv_open_options oo;
-    vv_open_options_init(&oo);
-    oo.mode = VV_OPEN_OUT_OF_CORE;
-    oo.levels = levels;
-    oo.cache = cache;
-    vv_opened od;
-    vt_ok(vv_open(&od, path, &oo));
-    assert_int_equal(vv_source_get_kind(od.source), levels ? VV_SOURCE_PYRAMID : VV_SOURCE_BRICKS);
-    vv_source *s = vv_source_ref(od.source);
-    vv_opened_clear(&od);
-    return s;
-}
-
 static const char *
 mode_name(vv_render_mode m) {
     static const char *const names[] = {"composite", "mip", "minip", "xray", "iso"};
@@ -121,8 +105,8 @@ test_two_heads(void **state) {
     vt_ok(vt_save(head, levels_path, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_cache *cache = NULL;
     vt_ok(vv_cache_new(&cache, 12 << 20));
-    vv_source *bricks = open_ooc(bricks_path, 0, cache);
-    vv_source *levels = open_ooc(levels_path, 1, cache);
+    vv_source *bricks = vt_open_ooc(bricks_path, 0, cache);
+    vv_source *levels = vt_open_ooc(levels_path, 1, cache);
     vv_brick_source bs;
     assert_true(vv_source_brick_view(bricks, &bs));
     vv_source_stats st0;

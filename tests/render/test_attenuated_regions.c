@@ -75,22 +75,6 @@ render_source(vv_volume *head, double att, vv_source *src, int level, double vox
     return img;
 }
 
-/* @p path opened out of core in @p cache, by its levels when @p levels. */
-static vv_source *
-open_ooc(const char *path, int levels, vv_cache *cache) {
-    vv_open_options oo;
-    vv_open_options_init(&oo);
-    oo.mode = VV_OPEN_OUT_OF_CORE;
-    oo.levels = levels;
-    oo.cache = cache;
-    vv_opened od;
-    vt_ok(vv_open(&od, path, &oo));
-    assert_int_equal(vv_source_get_kind(od.source), levels ? VV_SOURCE_PYRAMID : VV_SOURCE_BRICKS);
-    vv_source *s = vv_source_ref(od.source);
-    vv_opened_clear(&od);
-    return s;
-}
-
 /* Pixels of @p img brighter than the background (not an empty image). */
 static int
 lit_pixels(const vv_image *img) {
@@ -114,8 +98,8 @@ test_bricks_and_levels(void **state) {
     vt_ok(vt_save(head, levels_path, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_cache *cache = NULL;
     vt_ok(vv_cache_new(&cache, 8 << 20)); /* less than the head's 14 MB */
-    vv_source *bricks = open_ooc(bricks_path, 0, cache);
-    vv_source *levels = open_ooc(levels_path, 1, cache);
+    vv_source *bricks = vt_open_ooc(bricks_path, 0, cache);
+    vv_source *levels = vt_open_ooc(levels_path, 1, cache);
     vv_source_stats st;
     vv_source_stats_get(bricks, &st);
     assert_true(st.n_bricks > 4); /* several regions along each ray */
