@@ -112,6 +112,9 @@ typedef struct vv_remote_stats {
     uint64_t failed;         /**< of those, failed for good (the reader got an error) */
     uint64_t requests;       /**< HTTP requests sent (each retry and redirect counts) */
     uint64_t bytes_received; /**< bytes of response bodies received, every try included */
+    uint64_t cancelled;      /**< reads dropped unanswered because nobody wanted them any more
+                                  (a level-of-detail view moved on): not sent, or their
+                                  requests abandoned in flight; not in completed */
 } vv_remote_stats;
 
 /**

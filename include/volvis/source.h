@@ -115,14 +115,16 @@ typedef struct vv_source_stats {
     /* ---- pyramids ---- */
     uint64_t chunk_reads[VV_SOURCE_MAX_LEVELS]; /**< chunks read and decoded, per level */
     uint64_t chunk_hits;                        /**< chunks found decoded in the cache */
-    uint64_t missing;        /**< chunks absent from the store (the fill value) */
-    uint64_t frames;         /**< frames begun */
-    int max_reads_per_frame; /**< the most times one chunk was read within one frame */
-    uint64_t loaded;         /**< chunks the background loader read (in chunk_reads too) */
-    uint64_t cancelled;      /**< queued chunks a newer request dropped */
-    uint64_t load_stopped;   /**< queued chunks left when the cache was full of wanted ones */
-    uint64_t load_errors;    /**< the loader's failed reads (a frame reading them says why) */
-    int loading;             /**< chunks queued or being read now */
+    uint64_t missing;             /**< chunks absent from the store (the fill value) */
+    uint64_t frames;              /**< frames begun */
+    int max_reads_per_frame;      /**< the most times one chunk was read within one frame */
+    uint64_t loaded;              /**< chunks the background loader read (in chunk_reads too) */
+    uint64_t cancelled;           /**< queued chunks a newer request dropped */
+    uint64_t cancelled_in_flight; /**< chunks being fetched (a remote store's) that a newer
+                                       request dropped: their requests not sent or abandoned */
+    uint64_t load_stopped;        /**< queued chunks left when the cache was full of wanted ones */
+    uint64_t load_errors;         /**< the loader's failed reads (a frame reading them says why) */
+    int loading;                  /**< chunks queued or being read now */
     int stalled;       /**< 1: the loader stopped short of the newest request (the cache is full of
                             chunks the view wants: a converged frame must stream) */
     uint64_t resident; /**< chunks decoded in the cache now */

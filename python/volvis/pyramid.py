@@ -86,14 +86,16 @@ def remote_stats():
     server says its length), ``in_flight`` (HTTP requests on the wire now),
     ``completed`` (reads answered: received, absent or failed), ``failed``
     (of those, failed for good), ``requests`` (HTTP requests sent, each
-    retry and redirect counted) and ``bytes_received`` (bytes of response
-    bodies, every try). Thread-safe; a snapshot whose fields are each read
+    retry and redirect counted), ``bytes_received`` (bytes of response
+    bodies, every try) and ``cancelled`` (reads dropped unanswered because
+    no view wanted them any more: not sent, or abandoned in flight; not in
+    ``completed``). Thread-safe; a snapshot whose fields are each read
     atomically, so two of them may be a moment apart while reads go on."""
     st = ffi.new("vv_remote_stats *")
     lib.vv_remote_stats_get(st)
     return {k: int(getattr(st, k)) for k in ("pending", "pending_bytes", "in_flight",
                                              "completed", "failed", "requests",
-                                             "bytes_received")}
+                                             "bytes_received", "cancelled")}
 
 
 class Pyramid:
@@ -191,9 +193,10 @@ class Pyramid:
         level (a pyramid) or bricks read (bricks), cache hits, missing
         chunks, evictions, bytes read, its peak in the cache, frames and the
         most reads of one chunk in a frame; the background loader's chunks
-        read, cancelled (a newer request dropped them), stopped (the cache
-        was full of wanted chunks) and failed, and how many it has queued or
-        in flight now."""
+        read, cancelled (a newer request dropped them from its queue),
+        cancelled_in_flight (a newer request dropped them while a remote
+        store's fetch was in flight), stopped (the cache was full of wanted
+        chunks) and failed, and how many it has queued or in flight now."""
         st = ffi.new("vv_source_stats *")
         lib.vv_source_stats_get(self._c, st)
         n = lib.vv_source_levels(self._c)
@@ -204,6 +207,7 @@ class Pyramid:
                 "peak_bytes": int(st.peak_bytes), "held_bytes": int(st.held_bytes),
                 "frames": int(st.frames), "max_reads_per_frame": int(st.max_reads_per_frame),
                 "loaded": int(st.loaded), "cancelled": int(st.cancelled),
+                "cancelled_in_flight": int(st.cancelled_in_flight),
                 "load_stopped": int(st.load_stopped), "load_errors": int(st.load_errors),
                 "loading": int(st.loading), "stalled": int(st.stalled)}
 

@@ -120,6 +120,7 @@ py_stats(void *user, vv_source_stats *out) {
     out->max_reads_per_frame = st.max_reads_per_frame;
     out->loaded = st.loaded;
     out->cancelled = st.cancelled;
+    out->cancelled_in_flight = st.cancelled_in_flight;
     out->load_stopped = st.load_stopped;
     out->load_errors = st.load_errors;
     out->loading = st.loading;

@@ -19,11 +19,25 @@
  *   frame's image bit for bit.
  * - A chunk that does not decode: the loader counts it and goes on; the
  *   frame that needs it fails with the store's one-line error.
+ * - The same store by URL from a loopback server that holds level 0's
+ *   chunks: a request for nothing drops the fetches in flight (their
+ *   connections closed, the server sees the client go) instead of waiting
+ *   for them; asked again once the server answers, every chunk arrives and
+ *   the level-0 frame is the local file's bit for bit.
  */
+#include <arpa/inet.h>
+#include <fcntl.h>
 #include <math.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "testutil.h"
@@ -392,6 +406,239 @@ test_broken_chunk(void **state) {
     vv_pyramid_free(p);
 }
 
+/* ---- the store by URL, from a server that holds level 0's chunks ---------- */
+
+/* A loopback HTTP server of the files beneath root, one request a
+ * connection (Connection: close), a thread each; a request for a level-0
+ * chunk ("/0/c/" in its path) is held until release, and counted
+ * abandoned when the client closes its connection meanwhile. */
+typedef struct hold_srv {
+    int fd, port;
+    char root[4096];
+    atomic_int release, stop, held, abandoned, live;
+    pthread_t th;
+} hold_srv;
+
+typedef struct hold_conn {
+    hold_srv *s;
+    int c;
+} hold_conn;
+
+static void
+send_all(int c, const void *buf, size_t n) {
+    const char *p = buf;
+    while (n > 0) {
+        const ssize_t w = send(c, p, n, MSG_NOSIGNAL);
+        if (w <= 0)
+            return;
+        p += w;
+        n -= (size_t)w;
+    }
+}
+
+static void *
+hold_conn_main(void *u) {
+    hold_conn *hc = u;
+    hold_srv *s = hc->s;
+    const int c = hc->c;
+    free(hc);
+    char req[8192];
+    size_t n = 0;
+    while (n + 1 < sizeof req) {
+        const ssize_t r = recv(c, req + n, sizeof req - 1 - n, 0);
+        if (r <= 0)
+            break;
+        n += (size_t)r;
+        req[n] = '\0';
+        if (strstr(req, "\r\n\r\n"))
+            break;
+    }
+    req[n] = '\0';
+    char path[2048] = "";
+    int gone = 0;
+    if (sscanf(req, "GET %2047s", path) == 1 && strstr(path, "/0/c/")) {
+        atomic_fetch_add(&s->held, 1);
+        while (!atomic_load(&s->release) && !gone) {
+            struct pollfd pf = {.fd = c, .events = POLLIN};
+            char b;
+            if (poll(&pf, 1, 20) > 0 && recv(c, &b, 1, MSG_PEEK | MSG_DONTWAIT) <= 0)
+                gone = 1; /* the client closed it: the request abandoned */
+        }
+        atomic_fetch_sub(&s->held, 1);
+        if (gone)
+            atomic_fetch_add(&s->abandoned, 1);
+    }
+    char file[6200];
+    snprintf(file, sizeof file, "%s%s", s->root, path);
+    const int fd = gone ? -1 : open(file, O_RDONLY);
+    struct stat sb;
+    if (fd >= 0 && fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode)) {
+        char head[200];
+        snprintf(head, sizeof head,
+                 "HTTP/1.1 200 OK\r\nContent-Length: %lld\r\nConnection: close\r\n\r\n",
+                 (long long)sb.st_size);
+        send_all(c, head, strlen(head));
+        char buf[65536];
+        ssize_t r;
+        while ((r = read(fd, buf, sizeof buf)) > 0)
+            send_all(c, buf, (size_t)r);
+    } else if (!gone) {
+        const char *nf = "HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n";
+        send_all(c, nf, strlen(nf));
+    }
+    if (fd >= 0)
+        close(fd);
+    close(c);
+    atomic_fetch_sub(&s->live, 1);
+    return NULL;
+}
+
+static void *
+hold_accept(void *u) {
+    hold_srv *s = u;
+    while (!atomic_load(&s->stop)) {
+        struct pollfd pf = {.fd = s->fd, .events = POLLIN};
+        if (poll(&pf, 1, 50) <= 0)
+            continue;
+        const int c = accept(s->fd, NULL, NULL);
+        hold_conn *hc = c >= 0 ? malloc(sizeof *hc) : NULL;
+        pthread_t t;
+        if (!hc) {
+            if (c >= 0)
+                close(c);
+            continue;
+        }
+        *hc = (hold_conn){s, c};
+        atomic_fetch_add(&s->live, 1);
+        if (pthread_create(&t, NULL, hold_conn_main, hc) != 0) {
+            atomic_fetch_sub(&s->live, 1);
+            close(c);
+            free(hc);
+            continue;
+        }
+        pthread_detach(t);
+    }
+    return NULL;
+}
+
+static void
+hold_start(hold_srv *s, const char *root) {
+    memset(s, 0, sizeof *s);
+    snprintf(s->root, sizeof s->root, "%s", root);
+    s->fd = socket(AF_INET, SOCK_STREAM, 0);
+    assert_true(s->fd >= 0);
+    struct sockaddr_in a = {0};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    assert_int_equal(bind(s->fd, (struct sockaddr *)&a, sizeof a), 0);
+    socklen_t len = sizeof a;
+    assert_int_equal(getsockname(s->fd, (struct sockaddr *)&a, &len), 0);
+    s->port = ntohs(a.sin_port);
+    assert_int_equal(listen(s->fd, 64), 0);
+    assert_int_equal(pthread_create(&s->th, NULL, hold_accept, s), 0);
+}
+
+static void
+nap(void) {
+    const struct timespec ts = {0, 10000000};
+    nanosleep(&ts, NULL);
+}
+
+static void
+hold_stop(hold_srv *s) {
+    atomic_store(&s->release, 1);
+    atomic_store(&s->stop, 1);
+    pthread_join(s->th, NULL);
+    while (atomic_load(&s->live) > 0)
+        nap();
+    close(s->fd);
+}
+
+static double
+now_s(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Until @p ok(s) or @p seconds pass; 1 when it held. */
+static int
+wait_for(hold_srv *s, int (*ok)(hold_srv *s), double seconds) {
+    const double t0 = now_s();
+    while (!ok(s) && now_s() - t0 < seconds)
+        nap();
+    return ok(s);
+}
+
+static int
+all_held(hold_srv *s) {
+    return atomic_load(&s->held) >= 32;
+}
+
+static int
+all_abandoned(hold_srv *s) {
+    return atomic_load(&s->abandoned) >= 32;
+}
+
+static void
+test_cancel_in_flight_remote(void **state) {
+    (void)state;
+    if (!g_store[0])
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    fixture fx; /* the local store's level-0 frame */
+    fixture_init(&fx, g_store, 64 * MIB, 0, 0);
+    hold_srv *srv = calloc(1, sizeof *srv);
+    assert_non_null(srv);
+    hold_start(srv, vt_outdir("pyramid_loader"));
+    char url[128];
+    snprintf(url, sizeof url, "http://127.0.0.1:%d/head.ome.zarr", srv->port);
+    vv_pyramid *p = open_pyramid(url, 64 * MIB, 1); /* a URL is read in this process */
+    vv_remote_stats r0, r1;
+    vv_remote_stats_get(&r0);
+    /* every level-0 chunk in flight at once (two loaders, a window of 16
+     * each), the server holding them */
+    request_level0(p);
+    if (!wait_for(srv, all_held, 30.0))
+        fail_msg("the server holds %d of 32 requests", atomic_load(&srv->held));
+    /* the view moves on: nothing wanted; the loader is idle as soon as
+     * the fetches are dropped, not when the server answers */
+    const double t0 = now_s();
+    vt_ok(vv_pyramid_request(p, 0, NULL, NULL, NULL));
+    while (vv_pyramid_loading(p) > 0 && now_s() - t0 < 30.0)
+        vv_pyramid_wait(p, 0.1);
+    const double idle = now_s() - t0;
+    assert_int_equal(vv_pyramid_loading(p), 0);
+    assert_true(wait_for(srv, all_abandoned, 10.0)); /* their connections closed */
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    vv_remote_stats_get(&r1);
+    printf("dropped in flight: %llu chunks in %.3f s (the server saw %d requests abandoned); "
+           "remote reads cancelled %llu\n",
+           (unsigned long long)st.cancelled_in_flight, idle, atomic_load(&srv->abandoned),
+           (unsigned long long)(r1.cancelled - r0.cancelled));
+    assert_int_equal(st.cancelled_in_flight, 32);
+    assert_int_equal(st.loaded, 0);
+    assert_int_equal(st.load_errors, 0);
+    assert_int_equal(r1.cancelled - r0.cancelled, 32);
+    assert_int_equal(r1.failed, r0.failed);
+    assert_int_equal(r1.pending, 0);
+    /* asked again with the server answering: all of them arrive, and the
+     * level-0 frame is the local file's bit for bit */
+    atomic_store(&srv->release, 1);
+    request_level0(p);
+    wait_idle(p);
+    vv_pyramid_stats_get(p, &st);
+    assert_int_equal(st.loaded, 32);
+    assert_int_equal(st.load_errors, 0);
+    vv_lod lod;
+    vt_ok(frame(p, fx.w, 0, 0, &lod, fx.img));
+    assert_true(same_image(fx.img, fx.ref));
+    vv_pyramid_free(p);
+    hold_stop(srv);
+    free(srv);
+    fixture_free(&fx);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -403,6 +650,7 @@ main(void) {
         cmocka_unit_test(test_full_cache),
         cmocka_unit_test(test_progressive_stalls),
         cmocka_unit_test(test_broken_chunk),
+        cmocka_unit_test(test_cancel_in_flight_remote),
     };
     return vt_run_tests(tests, setup, NULL);
 }

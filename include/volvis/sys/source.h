@@ -231,11 +231,18 @@ typedef struct vv_store {
      * @p nthreads threads (the caller's among them) while the store fetches
      * the next ones; asked in the order given (the pyramid's: a frame's
      * plan, coarse levels first, then front to back). A remote store puts
-     * its requests in flight together. The first failing chunk's error.
+     * its requests in flight together. @p stale (may be NULL) says whether
+     * chunk i is still wanted: stale(@p stale_user, i) 1 when the caller
+     * no longer needs it (a view moved on); the store asks before fetching
+     * and while a fetch is in flight (from threads of its own, about every
+     * 50 ms) and drops such a chunk unread, cancelled[i] = 1 (its dst,
+     * missing, file_bytes and range untouched; not an error); @p cancelled
+     * may be NULL only when @p stale is. The first failing chunk's error.
      */
     vv_status (*read_many)(void *ctx, int level, int n, const int *c, unsigned char *const *dst,
                            const int *org, const int *dims, int nthreads, int *missing,
-                           uint64_t *file_bytes, double *range);
+                           uint64_t *file_bytes, double *range,
+                           int (*stale)(void *stale_user, int i), void *stale_user, int *cancelled);
 } vv_store;
 
 /**

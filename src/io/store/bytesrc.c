@@ -25,7 +25,7 @@
  * process's life): each count is one atomic, so that any thread reads them
  * without a lock while reads go on. */
 static atomic_uint_fast64_t n_pending, n_pending_bytes, n_in_flight, n_completed, n_failed,
-    n_requests, n_received;
+    n_requests, n_received, n_cancelled;
 
 void
 bs_count_open(bs_count *c, uint64_t want) {
@@ -85,6 +85,17 @@ bs_count_close(bs_count *c, int failed) {
 }
 
 void
+bs_count_cancel(bs_count *c) {
+    if (!c->open)
+        return;
+    c->open = 0;
+    atomic_fetch_sub(&n_pending_bytes, c->left);
+    c->left = 0;
+    atomic_fetch_add(&n_cancelled, 1);
+    atomic_fetch_sub(&n_pending, 1);
+}
+
+void
 vv_remote_stats_get(vv_remote_stats *st) {
     if (!st)
         return;
@@ -95,6 +106,7 @@ vv_remote_stats_get(vv_remote_stats *st) {
     st->failed = atomic_load(&n_failed);
     st->requests = atomic_load(&n_requests);
     st->bytes_received = atomic_load(&n_received);
+    st->cancelled = atomic_load(&n_cancelled);
 }
 
 int
@@ -215,6 +227,14 @@ static vv_status
 local_get_many(vv_bytesrc *src, bs_get *g, int n) {
     const bs_local *s = (const bs_local *)src;
     for (int i = 0; i < n; i++) {
+        g[i].cancelled = 0;
+        if (g[i].stale && g[i].stale(g[i].stale_u)) {
+            g[i].out = NULL;
+            g[i].n = 0;
+            g[i].missing = 0;
+            g[i].cancelled = 1;
+            continue;
+        }
         const vv_status st = local_get(s, &g[i]);
         if (st != VV_OK) {
             for (int k = 0; k < i; k++) {

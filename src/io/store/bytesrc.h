@@ -22,16 +22,25 @@
 /* One read of a batch: in, the object's key (relative to the store's
  * root), bytes [off, off + len) (off BS_SUFFIX: the last len bytes; len
  * BS_ALL: to the end; len 0: only whether it exists and its size), at
- * most max bytes; out, a new buffer *out (free it) of n bytes, the
- * object's size (UINT64_MAX when the server did not say), missing = 1
- * when the object is absent (out NULL). */
+ * most max bytes, and optionally (stale NULL: never) whether nobody wants
+ * it any more; out, a new buffer *out (free it) of n bytes, the object's
+ * size (UINT64_MAX when the server did not say), missing = 1 when the
+ * object is absent (out NULL), cancelled = 1 when it was dropped unread
+ * because stale answered 1 (out NULL, not an error: a view moved on).
+ * stale(stale_u) is asked before the read starts and, by a remote source,
+ * about every 50 ms while its request is in flight (the request is then
+ * abandoned: its connection closed); it runs on the thread that called
+ * get_many, with no lock of the source held, and must be thread-safe
+ * against whoever makes the read stale. */
 typedef struct bs_get {
     const char *key;
     uint64_t off, len, max;
+    int (*stale)(void *stale_u);
+    void *stale_u;
     unsigned char *out;
     size_t n;
     uint64_t size;
-    int missing;
+    int missing, cancelled;
 } bs_get;
 
 typedef struct vv_bytesrc vv_bytesrc;
@@ -103,6 +112,10 @@ void bs_count_landed(void);
 /* The read answered (@p failed: for good): pending - 1, completed + 1, what
  * it still counted pending dropped. Again: nothing. */
 void bs_count_close(bs_count *c, int failed);
+/* The read dropped unanswered because nobody wants it (bs_get.stale):
+ * pending - 1, cancelled + 1, what it still counted pending dropped.
+ * Again, or after bs_count_close: nothing. */
+void bs_count_cancel(bs_count *c);
 
 /* The process's HTTP(S) and S3 requests so far: *requests started (each
  * try and redirect one), *max_in_flight the most in flight at once, over

@@ -22,6 +22,8 @@
  * missing object. S3: SigV4 (CURLOPT_AWS_SIGV4) with the credentials of
  * the environment or ~/.aws, or anonymous. Errors are one line, "http:
  * URL: what" or "s3: s3://BUCKET/KEY: what"; credentials never appear.
+ * A read whose caller no longer wants it (bs_get.stale, asked about every
+ * 50 ms) is dropped: not sent, or its request abandoned in flight.
  */
 #include <ctype.h>
 #include <dirent.h>
@@ -694,7 +696,10 @@ start(bs_http *s, CURLM *m, xfer *x) {
     curl_easy_setopt(e, CURLOPT_PROTOCOLS_STR, "http,https");
     curl_easy_setopt(e, CURLOPT_FOLLOWLOCATION, 0L); /* followed here, each checked */
     curl_easy_setopt(e, CURLOPT_HTTP_VERSION, (long)CURL_HTTP_VERSION_2TLS);
-    curl_easy_setopt(e, CURLOPT_PIPEWAIT, 1L);
+    /* wait for a connection that may multiplex only where one can: HTTP/2 is
+     * asked over TLS alone, and over plain HTTP a batch would otherwise wait
+     * for its first response before opening its other connections */
+    curl_easy_setopt(e, CURLOPT_PIPEWAIT, strncmp(x->url, "https://", 8) ? 0L : 1L);
     curl_easy_setopt(e, CURLOPT_CONNECTTIMEOUT, cfg.connect_timeout);
     curl_easy_setopt(e, CURLOPT_LOW_SPEED_LIMIT, cfg.low_speed_limit);
     curl_easy_setopt(e, CURLOPT_LOW_SPEED_TIME, cfg.low_speed_time);
@@ -930,6 +935,26 @@ finish(bs_http *s, CURLM *m, xfer *x, CURLcode rc) {
     fail(s, x, VV_ERR_IO, w2);
 }
 
+/* @p x dropped because nobody wants it any more (bs_get.stale): its
+ * request, when one is in flight, abandoned (libcurl closes its
+ * connection), a retry waiting not made; returns 1 when a request was in
+ * flight. */
+static int
+drop(CURLM *m, xfer *x) {
+    const int active = x->started && !x->done;
+    if (active) {
+        curl_multi_remove_handle(m, x->e);
+        stats_flight(-1);
+        bs_count_landed();
+    }
+    x->started = 0;
+    x->done = 1;
+    x->status = VV_OK;
+    x->g->cancelled = 1;
+    bs_count_cancel(&x->cnt);
+    return active;
+}
+
 /* @p key made a URL path (unreserved bytes and '/' kept, the rest %XX). */
 static int
 escape_key(const char *key, char *out, size_t cap) {
@@ -957,12 +982,14 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
         free(x);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for %d transfers", n);
     }
-    int left = n;
+    int left = n, stale = 0;
     for (int i = 0; i < n; i++) {
         x[i].g = &g[i];
         g[i].out = NULL;
         g[i].n = 0;
         g[i].missing = 0;
+        g[i].cancelled = 0;
+        stale |= g[i].stale != NULL;
         g[i].size = UINT64_MAX;
         char ek[4400];
         if (g[i].key[0] == '/' || strstr(g[i].key, "..") || !escape_key(g[i].key, ek, sizeof ek) ||
@@ -981,12 +1008,26 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
         }
     }
     int active = 0;
+    double checked = now_s();
     while (left > 0) {
         const double t = now_s();
         double next_retry = 0;
+        if (stale && t - checked >= 0.05) { /* reads nobody wants any more: dropped */
+            checked = t;
+            for (int i = 0; i < n; i++)
+                if (!x[i].done && g[i].stale && g[i].stale(g[i].stale_u)) {
+                    active -= drop(m, &x[i]);
+                    left--;
+                }
+        }
         for (int i = 0; i < n && active < cfg.in_flight; i++) {
             if (x[i].done || x[i].started)
                 continue;
+            if (g[i].stale && g[i].stale(g[i].stale_u)) {
+                drop(m, &x[i]);
+                left--;
+                continue;
+            }
             if (x[i].retry_at > t) {
                 if (next_retry == 0 || x[i].retry_at < next_retry)
                     next_retry = x[i].retry_at;
@@ -1023,7 +1064,9 @@ http_get_many(vv_bytesrc *src, bs_get *g, int n) {
         if (active > 0) {
             curl_multi_poll(m, NULL, 0, 100, NULL);
         } else if (next_retry > 0) {
-            const double d = next_retry - now_s();
+            double d = next_retry - now_s();
+            if (stale && d > 0.05)
+                d = 0.05; /* a retry's wait is no reason to miss a read going stale */
             if (d > 0) {
                 struct timespec ts = {(time_t)d, (long)((d - (double)(time_t)d) * 1e9)};
                 nanosleep(&ts, NULL);

@@ -171,9 +171,25 @@ dc_worker(void *u) {
     return NULL;
 }
 
+/* read_many's stale for a loader's window (py_read_many). */
+typedef struct py_ask {
+    vv_pyramid *p;
+    py_chunk **todo;
+} py_ask;
+
+static int
+py_stale(void *u, int i) {
+    const py_ask *a = u;
+    pthread_mutex_lock(a->p->lock);
+    const py_chunk *e = a->todo[i];
+    const int stale = e->ce.pins <= 1 && e->ce.want != a->p->cl.want;
+    pthread_mutex_unlock(a->p->lock);
+    return stale;
+}
+
 vv_status
 py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file_bytes,
-             int *missing) {
+             int *missing, int *cancelled) {
     const vv_store *st = &p->store;
     if (n < 1)
         return VV_OK;
@@ -196,10 +212,15 @@ py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file
         }
         dst[i] = todo[i]->blk->data;
     }
-    const vv_status s = st->read_many(st->ctx, todo[0]->level, n, c, dst, org, dims, nthreads,
-                                      missing, file_bytes, range);
+    py_ask ask = {p, todo};
+    if (cancelled)
+        memset(cancelled, 0, sizeof *cancelled * (size_t)n);
+    const vv_status s =
+        st->read_many(st->ctx, todo[0]->level, n, c, dst, org, dims, nthreads, missing, file_bytes,
+                      range, cancelled ? py_stale : NULL, &ask, cancelled);
     for (int i = 0; s == VV_OK && i < n; i++) /* taken as the store copied them in */
-        vv_volume_set_range(todo[i]->blk, range + 2 * i);
+        if (!cancelled || !cancelled[i])
+            vv_volume_set_range(todo[i]->blk, range + 2 * i);
     free(c);
     free(dst);
     free(range);
@@ -215,7 +236,7 @@ read_many(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *miss
     const uint64_t quarter = vv_memory_budget_get() / 4, per = p->store.scratch;
     if (per && (uint64_t)nthreads * per > quarter)
         nthreads = quarter / per > 1 ? (int)(quarter / per) : 1;
-    return py_read_many(p, todo, n, nthreads < 1 ? 1 : nthreads, file_bytes, missing);
+    return py_read_many(p, todo, n, nthreads < 1 ? 1 : nthreads, file_bytes, missing, NULL);
 }
 
 /* Fetches the chunks in @p todo (n >= 1 of them, their blocks allocated)

@@ -39,9 +39,11 @@ typedef struct vv_pyramid_stats {
     int max_reads_per_frame; /**< the most times one chunk was read within one frame */
     uint64_t loaded;         /**< chunks the loader read (vv_pyramid_request; in chunk_reads too) */
     uint64_t cancelled;      /**< queued chunks a newer request dropped */
-    uint64_t load_stopped;   /**< queued chunks left when the cache was full of wanted ones */
-    uint64_t load_errors;    /**< the loader's failed reads (a frame reading them reports why) */
-    int loading;             /**< chunks queued or being read now */
+    uint64_t cancelled_in_flight; /**< chunks being fetched (a remote store's) that a newer
+                                       request dropped: their requests not sent or abandoned */
+    uint64_t load_stopped;        /**< queued chunks left when the cache was full of wanted ones */
+    uint64_t load_errors; /**< the loader's failed reads (a frame reading them reports why) */
+    int loading;          /**< chunks queued or being read now */
     /**
      * 1: the loader stopped short of the newest request because the cache
      * is full of chunks it wants (the view needs more than the limit holds:
@@ -138,7 +140,10 @@ vv_status vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out);
  * the level-of-detail driver's progressive frames ask for coarse levels
  * first, then the nodes nearest the eye). The request replaces what an
  * earlier one left queued (counted in cancelled: a new view made it
- * stale); chunks being read finish. n 0 cancels. Chunks already held are
+ * stale); chunks being read finish, except a remote store's whose fetch
+ * is in flight: those the new request does not ask for and no frame waits
+ * on are dropped, their requests abandoned (counted in
+ * cancelled_in_flight; within about 50 ms). n 0 cancels. Chunks already held are
  * marked wanted: the loader makes room by dropping only chunks the newest
  * request does not want (least recently used first), and stops when the
  * cache is full of wanted ones (counted in load_stopped). A frame needing a

@@ -187,9 +187,12 @@ take_queued(vv_pyramid *p, int level, int c[3]) {
 /* A loader's window of the queue (read_many; lock held): up to
  * load_window chunks of the first one's level reserved in the cache
  * (PY_LOADING) into @p e, read together without the lock, made ready.
- * Stops the queue as loader_main does when the cache is full. */
+ * Stops the queue as loader_main does when the cache is full. A chunk a
+ * newer request no longer wants (and no frame waits on) is dropped while
+ * its fetch is in flight (cancelled_in_flight): out of the cache, as a
+ * failed one nobody holds, asked again by any later request. */
 static void
-load_batch(vv_pyramid *p, py_chunk **e, uint64_t *fbytes, int *missing) {
+load_batch(vv_pyramid *p, py_chunk **e, uint64_t *fbytes, int *missing, int *cancelled) {
     const int w = load_window(p);
     int n = 0, level = -1, c[3];
     py_chunk *x;
@@ -202,13 +205,21 @@ load_batch(vv_pyramid *p, py_chunk **e, uint64_t *fbytes, int *missing) {
     p->in_flight += n;
     pthread_mutex_unlock(p->lock);
     /* decoded on this thread: the other loaders' windows are in flight meanwhile */
-    const vv_status s = py_read_many(p, e, n, 1, fbytes, missing);
+    const vv_status s = py_read_many(p, e, n, 1, fbytes, missing, cancelled);
     pthread_mutex_lock(p->lock);
     p->in_flight -= n;
     if (s != VV_OK)
         vv_error_clear(); /* a frame reading them reports the error */
     for (int i = 0; i < n; i++)
-        loaded(p, e[i], s, s == VV_OK ? fbytes[i] : 0, s == VV_OK ? missing[i] : 0);
+        if (s == VV_OK && cancelled[i]) {
+            e[i]->state = PY_FAILED; /* gone with the reader's pin; a frame now waiting reads it */
+            vv_volume_free(e[i]->blk);
+            e[i]->blk = NULL;
+            p->st.cancelled_in_flight++;
+            p->arrivals++;
+            py_unpin(p, e[i]);
+        } else
+            loaded(p, e[i], s, s == VV_OK ? fbytes[i] : 0, s == VV_OK ? missing[i] : 0);
     pthread_cond_broadcast(&p->arrived);
 }
 
@@ -221,10 +232,11 @@ loader_main(void *arg) {
     py_chunk **win = batched ? malloc(sizeof *win * (size_t)w) : NULL;
     uint64_t *wbytes = batched ? malloc(sizeof *wbytes * (size_t)w) : NULL;
     int *wmiss = batched ? malloc(sizeof *wmiss * (size_t)w) : NULL;
+    int *wgone = batched ? malloc(sizeof *wgone * (size_t)w) : NULL;
     pthread_mutex_lock(p->lock);
     while (!p->quit) {
-        if (batched && win && wbytes && wmiss && p->q_pos < p->q_n) {
-            load_batch(p, win, wbytes, wmiss);
+        if (batched && win && wbytes && wmiss && wgone && p->q_pos < p->q_n) {
+            load_batch(p, win, wbytes, wmiss, wgone);
             continue;
         }
         if (p->q_pos >= p->q_n || (p->store.scratch && !scratch)) {
@@ -252,6 +264,7 @@ loader_main(void *arg) {
     free(win);
     free(wbytes);
     free(wmiss);
+    free(wgone);
     return NULL;
 }
 

@@ -169,6 +169,14 @@ typedef struct zr_dest {
     int missing;
     uint64_t file_bytes;
     double range[2]; /* the voxel range of what was copied into dst, widened */
+    /* optional (NULL): 1 when nobody wants the chunk any more (a remote
+     * read asks before its request and while it is in flight; called as
+     * stale(stale_u, stale_i) from the fetching threads); cancelled = 1
+     * when it was dropped unread for that (dst untouched, missing,
+     * file_bytes and range unset) */
+    int (*stale)(void *stale_u, int stale_i);
+    void *stale_u;
+    int stale_i, cancelled;
 } zr_dest;
 
 /* The spatial chunks @p L[0 .. n) (NULL: 0 .. n - 1, in that order) of
@@ -185,8 +193,11 @@ typedef struct zr_dest {
  * order of @p L (the caller's: a level-of-detail frame's is coarse levels
  * first, then front to back), the encoded bytes held (in flight and
  * waiting) at most a quarter of the memory budget. A local store is read
- * chunk by chunk on the threads (pread). Errors: the first failing
- * chunk's (in the order of @p L, per batch), as vv_zr_copy_chunk. */
+ * chunk by chunk on the threads (pread). A chunk whose each[i].stale
+ * answers 1 is dropped unread (each[i].cancelled; a remote request of it
+ * not sent, or abandoned in flight once no chunk it carries is wanted).
+ * Errors: the first failing chunk's (in the order of @p L, per batch), as
+ * vv_zr_copy_chunk. */
 vv_status vv_zr_copy_chunks(const zr_layout *J, const uint64_t *L, uint64_t n, unsigned char *dst,
                             const int dorg[3], const int ddims[3], zr_dest *each, int nthreads,
                             double *range);

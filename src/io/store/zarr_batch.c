@@ -42,6 +42,14 @@
 #define ZB_RUN_MIN ((uint64_t)256 << 10)
 #define ZB_RUN_CHUNKS 4096
 
+struct zb_job;
+
+/* A run of a window as its read's bs_get.stale sees it. */
+typedef struct zb_ask {
+    const struct zb_job *j;
+    uint64_t r;
+} zb_ask;
+
 /* One window of runs put in flight together, then decoded: run r's
  * response holds its chunks' bytes back to back. */
 typedef struct zb_win {
@@ -51,6 +59,7 @@ typedef struct zb_win {
     uint64_t taken, left;
     uint64_t *run; /* the runs' numbers */
     bs_get *g;
+    zb_ask *ask;
     char *keys;
     uint64_t held; /* bytes received, not yet decoded */
 } zb_win;
@@ -61,6 +70,7 @@ typedef struct zb_job {
     unsigned char *dst;
     const int *dorg, *ddims;
     zr_dest *each;
+    int stale; /* 1: some of each has a stale callback */
     double range[2];
     /* the plan, by position: read-unit index, range, absent */
     uint64_t *idx, *off, *len;
@@ -106,6 +116,7 @@ win_free(zb_win *w) {
         free(w->g[i].out);
     free(w->run);
     free(w->g);
+    free(w->ask);
     free(w->keys);
     free(w);
 }
@@ -116,8 +127,27 @@ reserve(const zb_job *j, uint64_t r) {
     return j->rlen[r] != ZR_ALL ? j->rlen[r] : j->estimate;
 }
 
+/* 1 when chunk @p p's caller wants it no more (zr_dest.stale). */
+static int
+unwanted(const zb_job *j, uint64_t p) {
+    const zr_dest *d = j->each ? &j->each[p] : NULL;
+    return d && d->stale && d->stale(d->stale_u, d->stale_i);
+}
+
+/* bs_get.stale of a run: 1 when none of its chunks is wanted. */
+static int
+run_stale(void *u) {
+    const zb_ask *a = u;
+    const zb_job *j = a->j;
+    for (uint64_t k = 0; k < j->rcount[a->r]; k++)
+        if (!unwanted(j, j->fetch[j->order[j->rfirst[a->r] + k]]))
+            return 0;
+    return 1;
+}
+
 /* A fetching thread: windows of the plan in order, each put in flight
- * whole, then queued for the decoders. */
+ * whole (a run none of whose chunks is wanted any more dropped: not
+ * sent, or abandoned in flight), then queued for the decoders. */
 static void *
 fetcher(void *u) {
     zb_job *j = u;
@@ -147,9 +177,10 @@ fetcher(void *u) {
             win->n = (int)w;
             win->run = malloc(w * sizeof *win->run);
             win->g = calloc(w, sizeof *win->g);
+            win->ask = calloc(w, sizeof *win->ask);
             win->keys = malloc(w * ZB_KEY);
         }
-        if (!win || !win->run || !win->g || !win->keys)
+        if (!win || !win->run || !win->g || !win->ask || !win->keys)
             s = vv_error_set(VV_ERR_NOMEM, "out of memory for %llu chunk reads",
                              (unsigned long long)w);
         for (uint64_t i = 0; s == VV_OK && i < w; i++) {
@@ -163,10 +194,13 @@ fetcher(void *u) {
             win->run[i] = r;
             win->members += j->rcount[r];
             /* one chunk: at most what its codecs make of it; a run: its exact bytes */
+            win->ask[i] = (zb_ask){j, r};
             win->g[i] = (bs_get){.key = key,
                                  .off = j->roff[r],
                                  .len = j->rlen[r],
-                                 .max = j->rcount[r] > 1 ? j->rlen[r] : j->max};
+                                 .max = j->rcount[r] > 1 ? j->rlen[r] : j->max,
+                                 .stale = j->stale ? run_stale : NULL,
+                                 .stale_u = &win->ask[i]};
         }
         if (s == VV_OK)
             s = zr_store_get_many(a, win->g, (int)w);
@@ -260,7 +294,9 @@ decoder(void *u) {
         pthread_mutex_unlock(&j->mu);
         const uint64_t r = w->run[i], p = j->fetch[j->order[j->rfirst[r] + k]];
         const bs_get *g = &w->g[i];
-        if (!skip && g->missing) /* the object went since its index was read */
+        if (!skip && g->cancelled) /* nobody wanted it: not read */
+            j->each[p].cancelled = 1;
+        else if (!skip && g->missing) /* the object went since its index was read */
             decode_one(j, p, NULL, NULL, 0, buf, range);
         else if (!skip && j->rcount[r] == 1)
             decode_one(j, p, g, g->out, g->n, buf, range);
@@ -312,6 +348,10 @@ copy_each(const zr_layout *J, const uint64_t *L, uint64_t n, unsigned char *dst,
         for (long long i = 0; i < (long long)n; i++) {
             const uint64_t c = L ? L[i] : (uint64_t)i;
             zr_dest *d = each ? &each[i] : NULL;
+            if (d && d->stale && d->stale(d->stale_u, d->stale_i)) {
+                d->cancelled = 1; /* nobody wants it any more */
+                continue;
+            }
             vv_status cs = !buf ? vv_error_set(VV_ERR_NOMEM,
                                                "out of memory for a chunk of %zu bytes", J->cbytes)
                            : d  ? vv_zr_copy_chunk(J, c, buf, d->dst, d->org, d->dims, &d->missing,
@@ -491,6 +531,8 @@ vv_zr_copy_chunks(const zr_layout *J, const uint64_t *L, uint64_t n, unsigned ch
                 .each = each,
                 .range = {INFINITY, -INFINITY},
                 .first = -1};
+    for (uint64_t i = 0; each && i < n; i++)
+        j.stale |= each[i].stale != NULL;
     atomic_init(&j.next_direct, 0);
     pthread_mutex_init(&j.mu, NULL);
     pthread_cond_init(&j.cv, NULL);

@@ -37,7 +37,8 @@ zp_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsi
 /* A remote store's chunks of one level in batches (vv_zr_copy_chunks). */
 static vv_status
 zp_read_many(void *ctx, int level, int n, const int *c, unsigned char *const *dst, const int *org,
-             const int *dims, int nthreads, int *missing, uint64_t *file_bytes, double *range) {
+             const int *dims, int nthreads, int *missing, uint64_t *file_bytes, double *range,
+             int (*stale)(void *stale_user, int i), void *stale_user, int *cancelled) {
     const zp_level *l = &((const zp_store *)ctx)->lv[level];
     uint64_t *L = calloc((size_t)(n > 0 ? n : 1), sizeof *L);
     zr_dest *d = calloc((size_t)(n > 0 ? n : 1), sizeof *d);
@@ -49,10 +50,17 @@ zp_read_many(void *ctx, int level, int n, const int *c, unsigned char *const *ds
         memcpy(d[i].dims, dims + 3 * i, sizeof d[i].dims);
         d[i].range[0] = INFINITY;
         d[i].range[1] = -INFINITY;
+        d[i].stale = stale;
+        d[i].stale_u = stale_user;
+        d[i].stale_i = i;
     }
     if (s == VV_OK)
         s = vv_zr_copy_chunks(&l->J, L, (uint64_t)n, NULL, NULL, NULL, d, nthreads, NULL);
     for (int i = 0; s == VV_OK && i < n; i++) {
+        if (cancelled)
+            cancelled[i] = d[i].cancelled;
+        if (d[i].cancelled)
+            continue;
         missing[i] = d[i].missing;
         file_bytes[i] = d[i].file_bytes;
         range[2 * i] = d[i].range[0];
