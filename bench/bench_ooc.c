@@ -4,8 +4,10 @@
  * limit:
  *   bench_ooc VOLUME [--raw WxHxD:u8] [--memory-limit MiB] [--size N]
  *             [--frames F] [--tf LO:HI] [--dataset NAME]
- *   bench_ooc --generate N OUT.raw [u16]   (the synthetic N^3 u8 volume;
- *                                           u16: the same, 16 times the values)
+ *   bench_ooc --generate N OUT.raw [u16|u16noise]   (the synthetic N^3 u8
+ *       volume; u16: the same, 16 times the values; u16noise: and a scanner's
+ *       noise inside the sphere, -32 .. 31 uniform, so that it compresses as
+ *       scans do rather than 30-fold)
  * Opens VOLUME (.vvb, raw with --raw, or uncompressed NRRD) as a bricked
  * volume with the memory limit (default 1024 MiB), builds the default World
  * from its coarse proxy with a transfer function ramp LO..HI, and renders F
@@ -29,7 +31,9 @@
 /* Writes the synthetic n^3 u8 volume of bench/ooc_2048.sh to @p path, one
  * slice at a time: a sphere of tissue (radius 0.45 n) with a shell of bone
  * and ripples, air around; with @p u16, little-endian u16 voxels of 16
- * times the values (0 .. 4080, a 12-bit scanner's range). */
+ * times the values (0 .. 4080, a 12-bit scanner's range), and with u16 2
+ * a noise of -32 .. 31 added inside the sphere (a hash of the voxel's
+ * index: the same file every time). */
 static int
 generate(const char *path, int n, int u16) {
     FILE *f = fopen(path, "wb");
@@ -50,7 +54,15 @@ generate(const char *path, int n, int u16) {
             }
         if (u16) {
             for (size_t q = 0; q < (size_t)n * n; q++) {
-                const uint16_t w = (uint16_t)(sl[q] * 16u);
+                uint16_t w = (uint16_t)(sl[q] * 16u);
+                if (u16 == 2 && sl[q]) {
+                    uint64_t h =
+                        ((uint64_t)k * (uint64_t)n * (uint64_t)n + q + 1) * 0x9E3779B97F4A7C15ull;
+                    h ^= h >> 29;
+                    h *= 0xBF58476D1CE4E5B9ull;
+                    h ^= h >> 32;
+                    w = (uint16_t)(w + (h & 63u) - 32);
+                }
                 unsigned char *b = (unsigned char *)&wide[q];
                 b[0] = (unsigned char)(w & 0xff); /* little-endian on any host */
                 b[1] = (unsigned char)(w >> 8);
@@ -69,7 +81,11 @@ generate(const char *path, int n, int u16) {
 int
 main(int argc, char **argv) {
     if ((argc == 4 || argc == 5) && strcmp(argv[1], "--generate") == 0)
-        return generate(argv[3], atoi(argv[2]), argc == 5 && strcmp(argv[4], "u16") == 0);
+        return generate(argv[3], atoi(argv[2]),
+                        argc < 5                           ? 0
+                        : strcmp(argv[4], "u16") == 0      ? 1
+                        : strcmp(argv[4], "u16noise") == 0 ? 2
+                                                           : 0);
     const char *path = NULL, *dataset = "ooc";
     vv_raw_params raw;
     vv_raw_params_init(&raw);

@@ -27,6 +27,7 @@ import re
 import shutil
 import signal
 import subprocess
+import time
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -168,6 +169,22 @@ try:
             ok = np.array_equal(x1, x2) and s1 == s2 and g1 == g2
         check(ok, f"level 0 of {name} by URL: at least 16 requests in flight ({most}) and "
               f"the local voxels ({p2.stderr.strip()})")
+    # opening a pyramid by URL fetches each metadata document once (the root's is
+    # not read again for every level; the levels' are asked together): an
+    # out-of-core render of each store, every zarr.json, .zattrs and .zarray in the
+    # access log at most once
+    for name, local in (("v3", v3), ("v2", v2)):
+        open(log, "w").close()
+        p = volvis("render", f"{http}/{os.path.basename(local)}", "-o",
+                   os.path.join(OUT, f"meta_{name}.png"), "--memory-limit", "64M", "--size",
+                   "64x64", "-q")
+        time.sleep(0.2)
+        meta = re.compile(r'^\d+ (?:GET|HEAD) "([^"]*(?:zarr\.json|\.zattrs|\.zarray|\.zgroup))"')
+        docs = [m.group(1) for m in map(meta.match, log_lines()) if m]
+        twice = sorted({d for d in docs if docs.count(d) > 1})
+        check(p.returncode == 0 and docs and not twice,
+              f"render {name} by URL fetches each metadata document once ({len(docs)} "
+              f"fetches; twice: {twice[:3]}; {p.stderr.strip()})")
     # --cache-dir: a second read sends If-None-Match and takes the bytes from the
     # cache on 304; a small bound is kept
     cache = os.path.join(OUT, "cache")

@@ -35,11 +35,13 @@
 #include <fcntl.h>
 #include <limits.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <blosc.h>
@@ -87,6 +89,141 @@ zr_store_get_many(const zr_array *a, bs_get *g, int n) {
     return loc.base.ops->get_many(&loc.base, g, n);
 }
 
+/* ---- a remote store's metadata, kept a moment ------------------------------------------ */
+
+/* The JSON documents of remote stores (zarr.json, .zattrs, .zarray) fetched
+ * in the last ZR_MEMO_SECONDS, absent ones too, keyed by the store's URL
+ * and the key: opening a pyramid parses the root's document once for every
+ * level, and the levels' own documents are fetched together
+ * (prefetch_levels), so that an open is a few round trips, not two a
+ * level. Older entries are fetched again (a store that changes is seen as
+ * it is 10 s later). At most ZR_MEMO_N documents of up to ZR_MEMO_MAX
+ * bytes; the oldest replaced. One mutex. */
+#define ZR_MEMO_N 64
+#define ZR_MEMO_MAX ((size_t)1 << 20)
+#define ZR_MEMO_SECONDS 10.0
+
+typedef struct zr_memo {
+    char *url;
+    unsigned char *b;
+    size_t n;
+    int missing;
+    double t;
+} zr_memo;
+
+static zr_memo memo[ZR_MEMO_N];
+static pthread_mutex_t memo_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static double
+memo_now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static char *
+memo_url(const zr_array *a, const char *key) {
+    const size_t n = strlen(a->root) + strlen(key) + 2;
+    char *u = malloc(n);
+    if (u)
+        snprintf(u, n, "%s/%s", a->root, key);
+    return u;
+}
+
+/* 1 and a copy of the document (*b, *n; free it) or its absence when
+ * @p key of @p a's store was fetched lately. */
+static int
+memo_get(const zr_array *a, const char *key, unsigned char **b, size_t *n, int *missing) {
+    char *u = memo_url(a, key);
+    int hit = 0;
+    pthread_mutex_lock(&memo_lock);
+    const double now = memo_now();
+    for (int i = 0; u && i < ZR_MEMO_N && !hit; i++) {
+        const zr_memo *m = &memo[i];
+        if (!m->url || strcmp(m->url, u) || now - m->t > ZR_MEMO_SECONDS)
+            continue;
+        *b = m->missing ? NULL : malloc(m->n ? m->n : 1);
+        if (!m->missing && !*b)
+            break;
+        if (*b)
+            memcpy(*b, m->b, m->n);
+        *n = m->missing ? 0 : m->n;
+        *missing = m->missing;
+        hit = 1;
+    }
+    pthread_mutex_unlock(&memo_lock);
+    free(u);
+    return hit;
+}
+
+/* Keeps document @p key of @p a's store (@p b, @p n; copied) or its
+ * absence. */
+static void
+memo_put(const zr_array *a, const char *key, const unsigned char *b, size_t n, int missing) {
+    if (n > ZR_MEMO_MAX)
+        return;
+    char *u = memo_url(a, key);
+    unsigned char *c = missing ? NULL : malloc(n ? n : 1);
+    if (!u || (!missing && !c)) {
+        free(u);
+        free(c);
+        return;
+    }
+    if (c)
+        memcpy(c, b, n);
+    pthread_mutex_lock(&memo_lock);
+    int k = 0; /* the same URL's entry, else a free one, else the oldest */
+    for (int i = 0; i < ZR_MEMO_N; i++) {
+        if (memo[i].url && !strcmp(memo[i].url, u)) {
+            k = i;
+            break;
+        }
+        if (!memo[i].url ? memo[k].url != NULL : memo[k].url && memo[i].t < memo[k].t)
+            k = i;
+    }
+    free(memo[k].url);
+    free(memo[k].b);
+    memo[k] = (zr_memo){u, c, n, missing, memo_now()};
+    pthread_mutex_unlock(&memo_lock);
+}
+
+/* The documents of @p count levels (the datasets @p dsl of the store's
+ * multiscales) fetched together into the memo when the store is remote:
+ * each level's zarr.json, and its .zarray for a Zarr v2 store. What fails
+ * is left out: the level's own read reports it. */
+static void
+prefetch_levels(const zr_array *a, json_t *dsl, int count) {
+    if (!bs_is_url(a->root) || count < 2)
+        return;
+    const int per = a->zarr_format == 2 ? 2 : 1;
+    bs_get *g = calloc((size_t)(count * per), sizeof *g);
+    char *keys = malloc((size_t)(count * per) * 1100);
+    int n = 0;
+    for (int i = 0; g && keys && i < count; i++) {
+        const char *p = json_string_value(json_object_get(json_array_get(dsl, (size_t)i), "path"));
+        for (int f = 0; p && f < per; f++) {
+            char *k = keys + (size_t)n * 1100;
+            snprintf(k, 1100, "%s/%s", p, f ? ".zarray" : "zarr.json");
+            unsigned char *b = NULL;
+            size_t bn = 0;
+            int missing = 0;
+            if (memo_get(a, k, &b, &bn, &missing)) {
+                free(b);
+                continue;
+            }
+            g[n++] = (bs_get){.key = k, .off = 0, .len = ZR_ALL, .max = ZR_JSON_MAX};
+        }
+    }
+    if (n > 0 && zr_store_get_many(a, g, n) == VV_OK)
+        for (int i = 0; i < n; i++) {
+            memo_put(a, g[i].key, g[i].out, g[i].n, g[i].missing);
+            free(g[i].out);
+        }
+    vv_error_clear();
+    free(g);
+    free(keys);
+}
+
 /* The object @p key of the store loaded as JSON (at most ZR_JSON_MAX
  * bytes); NULL with the error set (naming @p name), or NULL without an
  * error when the object is absent and @p optional. */
@@ -103,7 +240,14 @@ load_json(const zr_array *a, const char *key, const char *name, int optional, vv
     unsigned char *b = NULL;
     size_t n = 0;
     int missing = 0;
-    *s = zr_store_get(a, key, 0, ZR_ALL, ZR_JSON_MAX, &b, &n, NULL, &missing);
+    const int remote = bs_is_url(a->root);
+    if (remote && memo_get(a, key, &b, &n, &missing))
+        *s = VV_OK;
+    else {
+        *s = zr_store_get(a, key, 0, ZR_ALL, ZR_JSON_MAX, &b, &n, NULL, &missing);
+        if (*s == VV_OK && remote)
+            memo_put(a, key, b, n, missing);
+    }
     if (*s == VV_OK && missing && !optional)
         *s = vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr array)", name);
     if (*s != VV_OK || missing)
@@ -400,6 +544,8 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         json_decref(za);
         return vv_error_set(VV_ERR_INVALID, "level %d asked, the store has %d", level, count);
     }
+    if (ms)
+        prefetch_levels(a, dsl, count); /* a remote store's: one round trip for every level */
     if (ds0) {
         const char *p = json_string_value(json_object_get(ds0, "path"));
         snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
