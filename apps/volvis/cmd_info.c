@@ -20,7 +20,14 @@ static const cli_opt_spec info_opts[] = {
     {"time", 0, "T"},
     {"show-phi", 0, NULL},
     {"stats", 0, NULL},
+    {"level", 0, "L"},
 };
+
+/* The most bytes of voxels `info` reads for a pyramid's statistics without
+ * --level (also at most a quarter of the memory budget): of a local file,
+ * and of a store named by URL (fetched over the network). */
+#define INFO_STATS_BYTES ((uint64_t)256 << 20)
+#define INFO_STATS_BYTES_URL ((uint64_t)32 << 20)
 #define N_INFO_OPTS ((int)(sizeof info_opts / sizeof info_opts[0]))
 
 void
@@ -41,6 +48,8 @@ cli_info_usage(FILE *out) {
                  "For an irregular grid (the grid formats below): its kind, point and cell\n"
                  "counts by cell type, blocks or axes, bounds, and each field with its range\n"
                  "and missing values.\n"
+                 "For a pyramid (OME-Zarr, BigDataViewer, Imaris, .vvb with levels): each\n"
+                 "level's dimensions and spacing (see --level).\n"
                  "For OME-Zarr: an image's label images (labels/NAME: dimensions, type,\n"
                  "levels, colours; each opens as a label volume by its path); an HCS plate's\n"
                  "rows x columns, wells and fields per well, and the path that opens one\n"
@@ -63,6 +72,13 @@ cli_info_usage(FILE *out) {
                  "                  study (protected health information)\n"
                  "  --stats         .vvc: decode the volume and print its statistics\n"
                  "                  (within the memory budget, see 'volvis --help')\n"
+                 "  --level L       a multiresolution file (OME-Zarr, BigDataViewer, Imaris,\n"
+                 "                  .vvb): the statistics of level L, read whole (0: the\n"
+                 "                  finest). Without it, a pyramid's header and levels are\n"
+                 "                  level 0's and its statistics those of the finest level\n"
+                 "                  of at most 256 MiB (32 MiB by URL; and a quarter of the\n"
+                 "                  memory budget), named in the output: a 2048^3 store\n"
+                 "                  (local or by URL) is described without reading level 0\n"
                  "  -h, --help      show this help\n"
                  "\n"
                  "Example:\n"
@@ -482,6 +498,64 @@ info_vvc_header(const char *path, const vv_vvc_info *vi) {
     return CLI_EXIT_OK;
 }
 
+/* A multiresolution file's levels (vv_open out of core by levels): a new
+ * source in *src when @p path is a pyramid of several levels (NULL
+ * otherwise: `info` reads it as before), and the level whose statistics
+ * `info` prints: @p asked when >= 0, else the finest whose voxels take at
+ * most INFO_STATS_BYTES and a quarter of the memory budget (the coarsest
+ * when none does). */
+static int
+pyramid_levels(const char *path, int channel, int time, int asked, vv_source **src) {
+    *src = NULL;
+    vv_open_options o;
+    vv_open_options_init(&o);
+    o.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    o.levels = 1;
+    o.header_only = 1; /* a raw or NRRD file: no pass over its voxels (one level anyway) */
+    o.load.channel = channel;
+    o.load.time = time;
+    vv_opened op;
+    vv_error_clear();
+    if (vv_open(&op, path, &o) != VV_OK) {
+        vv_error_clear(); /* not a pyramid, or broken: the whole read says why */
+        return asked > 0 ? asked : 0;
+    }
+    vv_source *x = op.kind == VV_DATA_VOLUME && op.source ? vv_source_ref(op.source) : NULL;
+    vv_opened_clear(&op);
+    const int n = x ? vv_source_levels(x) : 0;
+    if (n < 2) {
+        vv_source_free(x);
+        return asked > 0 ? asked : 0;
+    }
+    *src = x;
+    if (asked >= 0)
+        return asked;
+    const uint64_t most = vv_path_is_url(path) ? INFO_STATS_BYTES_URL : INFO_STATS_BYTES;
+    uint64_t cap = vv_memory_budget_get() / 4;
+    cap = cap < most ? cap : most;
+    for (int L = 0; L < n; L++) {
+        const vv_volume *h = vv_source_level(x, L);
+        const uint64_t bytes = (uint64_t)h->dims[0] * (uint64_t)h->dims[1] * (uint64_t)h->dims[2] *
+                               vv_voxel_type_size(h->type);
+        if (bytes <= cap)
+            return L;
+    }
+    return n - 1;
+}
+
+/* A pyramid's levels, one line each. */
+static void
+print_levels(const vv_source *src, int stats_level) {
+    const int n = vv_source_levels(src);
+    printf("levels:       %d (a multiresolution pyramid: volvis render --lod, --level L)\n", n);
+    for (int L = 0; L < n; L++) {
+        const vv_volume *h = vv_source_level(src, L);
+        printf("              level %d: %d x %d x %d, spacing %g x %g x %g%s\n", L, h->dims[0],
+               h->dims[1], h->dims[2], h->spacing[0], h->spacing[1], h->spacing[2],
+               L == stats_level ? " (the statistics below)" : "");
+    }
+}
+
 int
 cli_info_main(int argc, char **argv) {
     cli_args a;
@@ -504,8 +578,10 @@ cli_info_main(int argc, char **argv) {
     const char *raw_spec = cli_get(&a, "raw");
     if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
         return rc;
-    int series = 0, channel = -1, time = -1;
+    int series = 0, channel = -1, time = -1, level = -1;
     if ((rc = cli_parse_series_channel(&a, &series, &channel, &time)))
+        return rc;
+    if ((s = cli_get(&a, "level")) && (rc = cli_parse_int(&a, "level", s, 0, 63, &level)))
         return rc;
 
     const char *path = a.pos[0];
@@ -557,23 +633,33 @@ cli_info_main(int argc, char **argv) {
         vv_vvc_free(c);
         if (s2 != VV_OK)
             return cli_fail(s2, path);
-    } else if ((rc = cli_load_volume_sc(path, raw_spec ? &raw : NULL, series, channel, time, &axes,
-                                        &v))) {
+    }
+    /* a pyramid: level 0's header, the statistics of a level that fits */
+    vv_source *pyr = NULL;
+    int slevel = level > 0 ? level : 0;
+    if (!is_vvc && !raw_spec)
+        slevel = pyramid_levels(path, channel, time, level, &pyr);
+    if (!is_vvc && (rc = cli_load_volume_level(path, raw_spec ? &raw : NULL, series, channel, time,
+                                               slevel, &axes, &v))) {
         vv_ome_zarr_contents_clear(&zc);
+        vv_source_free(pyr);
         return rc;
     }
+    /* the header printed: level 0's (the levels' own in the list) */
+    const vv_volume *hd = pyr && slevel > 0 ? vv_source_level(pyr, 0) : v;
 
     stats st;
     if ((rc = compute_stats(v, &st))) {
         vv_volume_free(v);
+        vv_source_free(pyr);
         return rc;
     }
     const char *format = raw_spec ? "raw" : is_vvc ? "vvc" : vv_format_name(axes.format);
-    uint64_t count = vv_volume_voxel_count(v);
-    const char *unit = vv_unit_name(v->unit);
+    uint64_t count = (uint64_t)hd->dims[0] * (uint64_t)hd->dims[1] * (uint64_t)hd->dims[2];
+    const char *unit = vv_unit_name(hd->unit);
     printf("file:         %s\n", path);
     printf("format:       %s\n", format);
-    printf("dimensions:   %d x %d x %d (%llu voxels)\n", v->dims[0], v->dims[1], v->dims[2],
+    printf("dimensions:   %d x %d x %d (%llu voxels)\n", hd->dims[0], hd->dims[1], hd->dims[2],
            (unsigned long long)count);
     if (is_vvc) {
         printf("vvc:          version %d, subcubes %d^3 (%d x %d x %d), quality %.2f, slope %g\n",
@@ -586,13 +672,16 @@ cli_info_main(int argc, char **argv) {
             printf("error bound:  %g on every voxel (corrections in steps of %g)\n",
                    vinfo.max_error, vinfo.corr_step);
     }
-    if (axes.n_levels > 1)
+    if (pyr)
+        print_levels(pyr, slevel);
+    else if (axes.n_levels > 1)
         printf("levels:       %d (a multiresolution pyramid: volvis render --lod, --level L)\n",
                axes.n_levels);
     if (axes.n_channels > 1 || axes.n_times > 1) {
         rc = print_axes(path, raw_spec ? &raw : NULL, series, channel, time, &axes, v);
         if (rc) {
             vv_volume_free(v);
+            vv_source_free(pyr);
             return rc;
         }
     }
@@ -602,20 +691,31 @@ cli_info_main(int argc, char **argv) {
         printf("labels:       a label image (OME-Zarr image-label): rendered as a label volume\n");
     print_ome_zarr_labels(path, &zc);
     vv_ome_zarr_contents_clear(&zc);
-    printf("spacing:      %g x %g x %g%s%s\n", v->spacing[0], v->spacing[1], v->spacing[2],
-           v->unit == VV_UNIT_UNKNOWN ? "" : " ", v->unit == VV_UNIT_UNKNOWN ? "" : unit);
-    printf("origin:       %g %g %g\n", v->origin[0], v->origin[1], v->origin[2]);
-    if (!is_identity(v->direction))
+    printf("spacing:      %g x %g x %g%s%s\n", hd->spacing[0], hd->spacing[1], hd->spacing[2],
+           hd->unit == VV_UNIT_UNKNOWN ? "" : " ", hd->unit == VV_UNIT_UNKNOWN ? "" : unit);
+    printf("origin:       %g %g %g\n", hd->origin[0], hd->origin[1], hd->origin[2]);
+    if (!is_identity(hd->direction))
         printf("direction:    [%g %g %g; %g %g %g; %g %g %g] (columns: i, j, k axes)\n",
-               v->direction[0], v->direction[1], v->direction[2], v->direction[3], v->direction[4],
-               v->direction[5], v->direction[6], v->direction[7], v->direction[8]);
-    vv_box box = vv_volume_world_box(v);
+               hd->direction[0], hd->direction[1], hd->direction[2], hd->direction[3],
+               hd->direction[4], hd->direction[5], hd->direction[6], hd->direction[7],
+               hd->direction[8]);
+    vv_box box = vv_volume_world_box(hd);
     printf("extent:       %g x %g x %g%s%s\n", box.max.x - box.min.x, box.max.y - box.min.y,
-           box.max.z - box.min.z, v->unit == VV_UNIT_UNKNOWN ? " (world units)" : " ",
-           v->unit == VV_UNIT_UNKNOWN ? "" : unit);
+           box.max.z - box.min.z, hd->unit == VV_UNIT_UNKNOWN ? " (world units)" : " ",
+           hd->unit == VV_UNIT_UNKNOWN ? "" : unit);
     printf("unit:         %s\n", unit);
     printf("data origin:  %s\n", data_origin_name(v->data_origin));
     printf("modification: %s\n", modification_name(v->modification));
+    if (pyr && slevel > 0)
+        printf("statistics:   of level %d (%d x %d x %d)%s\n", slevel, v->dims[0], v->dims[1],
+               v->dims[2],
+               level >= 0 ? ""
+               : vv_path_is_url(path)
+                   ? ": level 0 is more than info reads by URL (32 MiB, or a quarter of the "
+                     "memory budget); --level 0 reads it whole"
+                   : ": level 0 is more than info reads (256 MiB, or a quarter of the memory "
+                     "budget); --level 0 reads it whole");
+    vv_source_free(pyr);
     if (st.n == 0) {
         printf("range:        none (no finite voxels)\n");
     } else {

@@ -333,6 +333,37 @@ if p1.returncode == 0 and p2.returncode == 0 and p3.returncode == 0:
           f"out of core against in memory: {int(np.abs(a - b).max())} <= 1 apart")
 p = volvis("info", path)
 check(p.returncode == 0 and "levels" in p.stdout.lower(), f"info of the pyramid ({p.stderr.strip()})")
+# a pyramid whose level 0 is more than info reads (a quarter of a 4 MiB budget here;
+# 256 MiB by default): level 0's header and the levels listed, the statistics of the
+# finest level that fits, against zarr-python's read of that level; --level 0 reads
+# level 0 whole
+
+
+def info_stats(out):
+    rng = [ln.split(":", 1)[1].split("..") for ln in out.splitlines() if ln.startswith("range:")]
+    mean = [ln.split()[1] for ln in out.splitlines() if ln.startswith("mean:")]
+    return ((float(rng[0][0]), float(rng[0][1])) if rng else None,
+            float(mean[0]) if mean else None)
+
+
+grp = zarr.open_group(path, mode="r")
+lv = {L: grp[str(L)][...] for L in (0, 1)}
+p = volvis("--max-memory", "4M", "info", path)
+(rng, mean) = info_stats(p.stdout) if p.returncode == 0 else (None, None)
+check(p.returncode == 0 and "dimensions:   96 x 96 x 96" in p.stdout and
+      "level 1: 48 x 48 x 48, spacing 2 x 2 x 2 (the statistics below)" in p.stdout and
+      "statistics:   of level 1 (48 x 48 x 48): level 0 is more than info reads" in p.stdout and
+      rng == (float(lv[1].min()), float(lv[1].max())) and mean is not None and
+      abs(mean - lv[1].astype(np.float64).mean()) < 1e-3,
+      f"info of a pyramid larger than it reads: level 0's header, level 1's statistics "
+      f"({rng}, {mean}; {p.stderr.strip()})")
+p = volvis("--max-memory", "4M", "info", "--level", "0", path)
+(rng, mean) = info_stats(p.stdout) if p.returncode == 0 else (None, None)
+check(p.returncode == 0 and "(the statistics below)" in p.stdout and
+      "level 0: 96 x 96 x 96, spacing 1 x 1 x 1 (the statistics below)" in p.stdout and
+      rng == (float(lv[0].min()), float(lv[0].max())) and
+      abs(mean - lv[0].astype(np.float64).mean()) < 1e-3,
+      f"info --level 0 reads level 0 whole ({rng}, {mean}; {p.stderr.strip()})")
 
 # ---- hostile stores ----------------------------------------------------------------------------
 
