@@ -7,10 +7,12 @@ PSNR between the two.
 
 Usage (under Xvfb, .venv's python, the build tree's package):
   PYTHONPATH=build/release/python xvfb-run -a .venv/bin/python \\
-      bench/bench_napari_lod.py N OUT_DIR [CLI]
+      bench/bench_napari_lod.py N OUT_DIR [CLI] [--store PATH --contrast LO:HI]
 makes OUT_DIR/bN.raw (N^3 u8: shells and a lattice of bright points every
 8 voxels, written slab by slab) and OUT_DIR/bN.ome.zarr (volvis convert:
-its pyramid), unless they exist, then measures.
+its pyramid), unless they exist, then measures. --store measures an
+existing pyramid instead (e.g. bench/remote_2048.py's u16 phantom), drawn
+with the layer's contrast limits LO:HI (default 90:255, the u8 store's).
 """
 import os
 import subprocess
@@ -39,11 +41,19 @@ def make(n, out_dir, cli):
 
 
 def main():
-    n, out_dir = int(sys.argv[1]), sys.argv[2]
-    cli = sys.argv[3] if len(sys.argv) > 3 else "build/release/volvis"
+    args, opts = [], {}
+    it = iter(sys.argv[1:])
+    for x in it:
+        if x in ("--store", "--contrast"):
+            opts[x] = next(it)
+        else:
+            args.append(x)
+    n, out_dir = int(args[0]), args[1]
+    cli = args[2] if len(args) > 2 else "build/release/volvis"
+    contrast = tuple(float(c) for c in opts.get("--contrast", "90:255").split(":"))
     os.makedirs(out_dir, exist_ok=True)
     t0 = time.perf_counter()
-    store = make(n, out_dir, cli)
+    store = opts["--store"] if "--store" in opts else make(n, out_dir, cli)
     print("store %s (%.1f s to make or find)" % (store, time.perf_counter() - t0))
 
     import napari
@@ -60,7 +70,7 @@ def main():
     layer = v.open(store, plugin="volvis")[0]
     layer.rendering = "translucent"
     layer.colormap = "viridis"
-    layer.contrast_limits = (90, 255)
+    layer.contrast_limits = contrast
     v.dims.ndisplay = 3
     app = QApplication.instance()
     for _ in range(30):
