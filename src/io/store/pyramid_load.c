@@ -577,12 +577,22 @@ plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi
     return VV_OK;
 }
 
+/* A frame's plan (a frame drawn whole: every box read in this order).
+ * A store whose reads wait on the network (read_many: a remote one) has
+ * the plan's chunks asked of the loader as well, so that they stream in
+ * with every request in flight, in the plan's order, while the frame
+ * draws the boxes that arrived (it waits for those being fetched, reads
+ * itself those not yet taken): box by box, the frame would wait a round
+ * trip for each. */
 static vv_status
 src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
     vv_pyramid *p = user;
     pthread_mutex_lock(p->lock);
     const vv_status s = plan_locked(p, n, level, lo, hi);
     pthread_mutex_unlock(p->lock);
+    if (s == VV_OK && p->store.read_many && n > 0 &&
+        vv_pyramid_request(p, n, level, lo, hi) != VV_OK)
+        vv_error_clear(); /* a hint: the frame reads what it needs */
     return s;
 }
 
