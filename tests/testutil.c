@@ -283,6 +283,38 @@ vt_image_psnr(const vv_image *a, const vv_image *b, int *identical) {
 }
 
 double
+vt_image_diff(const vv_image *a, const vv_image *b, double *mean) {
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    const size_t n = 4 * (size_t)a->width * (size_t)a->height;
+    double m = 0, sum = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double d = fabs((double)a->rgba[i] - (double)b->rgba[i]);
+        m = d > m ? d : m;
+        sum += d;
+    }
+    if (mean)
+        *mean = n ? sum / (double)n : 0;
+    return m;
+}
+
+double
+vt_napari_attenuated_mip(const double *vals, int n, double lo, double hi, double att, double step,
+                         int *at) {
+    double sum = 0, best = -INFINITY;
+    for (int i = 0; i < n; i++) {
+        const double u = (vals[i] - lo) / (hi - lo);
+        sum += u < 0 ? 0 : u > 1 ? 1 : u;
+        const double x = vals[i] * exp(-att * (sum - 1) / step);
+        if (x > best) {
+            best = x;
+            *at = i;
+        }
+    }
+    return best;
+}
+
+double
 vt_png_psnr(const char *a, const char *b) {
     vv_image *x = NULL, *y = NULL;
     vt_ok(vv_image_read_png(&x, a));

@@ -173,6 +173,19 @@ double vt_png_psnr(const char *a, const char *b);
 /** PSNR in dB of two images of one size over their float RGBA channels
  * (INFINITY when equal); *@p identical (may be NULL): 1 when bit for bit. */
 double vt_image_psnr(const vv_image *a, const vv_image *b, int *identical);
+/** The largest and the mean absolute difference of two images of one size
+ * over their float RGBA channels (*@p mean may be NULL); returns the largest. */
+double vt_image_diff(const vv_image *a, const vv_image *b, double *mean);
+
+/**
+ * napari's attenuated MIP of one ray, computed from its formula (VisPy's
+ * volume shader), independently of the renderers: the @p n sample values
+ * @p vals front to back, S the running sum of clamp((v - lo) / (hi - lo),
+ * 0, 1), each value scaled by exp(-att (S - 1) / step); returns the largest
+ * scaled value, *@p at the index of its sample (the first of equals).
+ */
+double vt_napari_attenuated_mip(const double *vals, int n, double lo, double hi, double att,
+                                double step, int *at);
 
 /** Default-scene options (vv_world_new_for_volume, _for_grid) of a
  * @p size x @p size view from azimuth 30 and elevation 20 degrees, the
