@@ -298,6 +298,24 @@ vt_image_diff(const vv_image *a, const vv_image *b, double *mean) {
     return m;
 }
 
+void
+vt_tf_grey(vv_tf *tf, double lo, double hi) {
+    vv_tf_init(tf);
+    vt_ok(vv_tf_add_opacity(tf, lo, 1.0));
+    vt_ok(vv_tf_add_opacity(tf, hi, 1.0));
+    vt_ok(vv_tf_add_color(tf, lo, vv_vec3_make(0, 0, 0)));
+    vt_ok(vv_tf_add_color(tf, hi, vv_vec3_make(1, 1, 1)));
+}
+
+void
+vt_tf_flat_ends(vv_tf *tf, double lo, double hi) {
+    vv_tf_init(tf);
+    vt_ok(vv_tf_add_opacity(tf, lo + 0.3 * (hi - lo), 0.2));
+    vt_ok(vv_tf_add_opacity(tf, lo + 0.97 * (hi - lo), 1.0));
+    vt_ok(vv_tf_add_color(tf, lo, vv_vec3_make(0, 0, 1)));
+    vt_ok(vv_tf_add_color(tf, hi, vv_vec3_make(1, 1, 0)));
+}
+
 double
 vt_napari_attenuated_mip(const double *vals, int n, double lo, double hi, double att, double step,
                          int *at) {

@@ -4,6 +4,10 @@
  * on the CPU. Images of real data agree (MIP, MinIP and X-ray >= 60 dB,
  * composite and iso >= 45 dB; issue 64), with cut planes, point lights and
  * a 2-D transfer function, and three channels under each blend rule;
+ * napari's attenuated MIP (issue 80) agrees with raycast's on real and
+ * random 8-bit, 16-bit and float volumes (>= 60 dB, every channel within
+ * 0.01), with napari's formula on a bright voxel behind a dimmer slab (to
+ * one table entry), and at attenuation 0 is the gpu's MIP bit for bit;
  * empty-space skipping leaves the image bit for bit; what it does not draw
  * is refused in one line; out of core (the region contract: a .vvb of the
  * CT head (14 MB) 3.4 times the cache's budget of 4 MiB, paged brick by brick through the
@@ -155,12 +159,7 @@ agree_attenuated(vv_world *w, double att, const char *label) {
  * that meets the volume gives an opaque pixel of its projected value. */
 static void
 grey_tf(vv_world *w, double lo, double hi) {
-    vv_tf *tf = &w->objects[0]->tf;
-    vv_tf_init(tf);
-    vv_tf_add_opacity(tf, lo, 1);
-    vv_tf_add_opacity(tf, hi, 1);
-    vv_tf_add_color(tf, lo, vv_vec3_make(0, 0, 0));
-    vv_tf_add_color(tf, hi, vv_vec3_make(1, 1, 1));
+    vt_tf_grey(&w->objects[0]->tf, lo, hi);
 }
 
 static void
@@ -321,11 +320,7 @@ test_attenuated_mip_analytic(void **state) {
             o->shading = 0;
             o->step = step;
             o->attenuation = atts[a];
-            vv_tf_init(&o->tf);
-            vt_ok(vv_tf_add_opacity(&o->tf, lo, 1.0));
-            vt_ok(vv_tf_add_opacity(&o->tf, hi, 1.0));
-            vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 0)));
-            vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 1)));
+            vt_tf_grey(&o->tf, lo, hi);
             vt_ok(vv_world_add_object(w, o));
             int at = -1;
             const double want = vt_napari_attenuated_mip(samples, ns, lo, hi, atts[a], step, &at);
@@ -389,17 +384,12 @@ test_attenuated_mip_zero_is_mip(void **state) {
                                                       : floor(4000 * x));
                 }
         vv_volume_update_range(v);
-        const double lo = v->range[0], hi = v->range[1];
         vv_default_scene_options so = vt_scene_options(SIZE);
         vv_world *w;
         vt_ok(vv_world_new_for_volume(&w, v, &so));
         vv_object *o = w->objects[0];
         o->attenuation = 0;
-        vv_tf_init(&o->tf);
-        vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.3 * (hi - lo), 0.2));
-        vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.97 * (hi - lo), 1.0));
-        vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 1)));
-        vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 0)));
+        vt_tf_flat_ends(&o->tf, v->range[0], v->range[1]);
         o->mode = VV_MODE_MIP;
         vv_image *mip = render("gpu", w, NULL);
         o->mode = VV_MODE_ATTENUATED_MIP;
@@ -573,6 +563,12 @@ test_refusals(void **state) {
                       "no Vulkan device 15", NULL);
     vt_ok(vv_renderer_set_option(r, "device", "auto"));
     vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    /* attenuated MIP is drawn; a bad attenuation is refused as raycast refuses it */
+    w->objects[0]->mode = VV_MODE_ATTENUATED_MIP;
+    vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    w->objects[0]->attenuation = -1;
+    vt_expect_refusal("attenuation -1", vv_renderer_render(r, w, &w->view, &o, img), VV_ERR_INVALID,
+                      "attenuation must be >= 0", NULL);
     vv_image_free(img);
     vv_renderer_free(r);
     vv_world_free(w);
@@ -636,14 +632,17 @@ test_out_of_core(void **state) {
     if (r.status != 0)
         fail_msg("convert: %s", r.err);
     vt_run_result_free(&r);
-    static const char *const modes[] = {"composite", "mip", "minip", "xray", "iso"};
-    for (int m = 0; m < 5; m++) {
+    /* attenuated-mip: far from MIP at 0.5, combined by VV_REGION_ATTENUATED_MAX */
+    static const char *const modes[] = {"composite", "mip", "minip",
+                                        "xray",      "iso", "attenuated-mip"};
+    for (int m = 0; m < 6; m++) {
         char g[512], c[512];
         snprintf(g, sizeof g, "%s/ooc_gpu_%s.png", dir, modes[m]);
         snprintf(c, sizeof c, "%s/ooc_raycast_%s.png", dir, modes[m]);
         const char *tf = m == 4 ? "--iso" : "--tf", *tfv = m == 4 ? "600" : "100:1500";
         r = run_cli("render", vvb, "--renderer", "gpu", "--memory-limit", "4M", "--mode", modes[m],
-                    tf, tfv, "--azimuth", "30", "--elevation", "20", "--size", "200x200", "-o", g);
+                    tf, tfv, "--attenuation", "0.5", "--azimuth", "30", "--elevation", "20",
+                    "--size", "200x200", "-o", g);
         if (r.status != 0) {
             char why[512];
             snprintf(why, sizeof why, "%s", r.err);
@@ -654,8 +653,8 @@ test_out_of_core(void **state) {
         vt_run_result_free(&r);
         assert_true(said);
         r = run_cli("render", vvb, "--renderer", "raycast", "--set", "refinement=off",
-                    "--memory-limit", "4M", "--mode", modes[m], tf, tfv, "--azimuth", "30",
-                    "--elevation", "20", "--size", "200x200", "-o", c);
+                    "--memory-limit", "4M", "--mode", modes[m], tf, tfv, "--attenuation", "0.5",
+                    "--azimuth", "30", "--elevation", "20", "--size", "200x200", "-o", c);
         const int ok = r.status == 0;
         vt_run_result_free(&r);
         if (!ok)
@@ -666,24 +665,30 @@ test_out_of_core(void **state) {
             fail_msg("out of core %s: %.1f dB", modes[m], db);
     }
     /* the .vvb's pyramid by level of detail (the multiresolution driver):
-     * nodes of level 1 and 2 as regions */
-    char g[512], c[512];
-    snprintf(g, sizeof g, "%s/lod_gpu.png", dir);
-    snprintf(c, sizeof c, "%s/lod_raycast.png", dir);
-    static const char *const rc[2][3] = {{"gpu", "--set", "early_termination=0.99"},
-                                         {"raycast", "--set", "refinement=off"}};
-    for (int k = 0; k < 2; k++) {
-        r = run_cli("render", vvb, "--renderer", rc[k][0], rc[k][1], rc[k][2], "--lod", "2", "--tf",
-                    "100:1500", "--azimuth", "30", "--elevation", "20", "--size", "200x200", "-o",
-                    k ? c : g);
-        const int ok = r.status == 0 && strstr(r.out, "levels") != NULL;
-        vt_run_result_free(&r);
-        if (!ok)
-            fail_msg("%s --lod 2 failed or drew no levels", rc[k][0]);
+     * nodes of level 1 and 2 as regions; attenuated MIP's exponents
+     * weighed by the nodes' step_scale */
+    static const char *const lod_modes[2] = {"composite", "attenuated-mip"};
+    for (int m = 0; m < 2; m++) {
+        char g[512], c[512];
+        snprintf(g, sizeof g, "%s/lod_gpu%s.png", dir, m ? "_attenuated" : "");
+        snprintf(c, sizeof c, "%s/lod_raycast%s.png", dir, m ? "_attenuated" : "");
+        static const char *const rc[2][3] = {{"gpu", "--set", "early_termination=0.99"},
+                                             {"raycast", "--set", "refinement=off"}};
+        for (int k = 0; k < 2; k++) {
+            r = run_cli("render", vvb, "--renderer", rc[k][0], rc[k][1], rc[k][2], "--lod", "2",
+                        "--mode", lod_modes[m], "--attenuation", "0.5", "--tf", "100:1500",
+                        "--azimuth", "30", "--elevation", "20", "--size", "200x200", "-o",
+                        k ? c : g);
+            const int ok = r.status == 0 && strstr(r.out, "levels") != NULL;
+            vt_run_result_free(&r);
+            if (!ok)
+                fail_msg("%s --lod 2 --mode %s failed or drew no levels", rc[k][0], lod_modes[m]);
+        }
+        const double db = vt_png_psnr(g, c);
+        printf("# by level of detail (--lod 2), %s: gpu against raycast %.1f dB\n", lod_modes[m],
+               db);
+        assert_true(db >= (m ? 60 : 50));
     }
-    const double db = vt_png_psnr(g, c);
-    printf("# by level of detail (--lod 2): gpu against raycast %.1f dB\n", db);
-    assert_true(db >= 50);
 }
 
 /* One renderer, the transfer function changed between frames: the
@@ -745,15 +750,21 @@ test_over_device_budget(void **state) {
     vv_volume *vol;
     vv_world *w = vt_volume_scene("volumes/ct_head.nrrd", SIZE, &vol);
     static const char *const paged[] = {"device_memory_mb", "2", NULL};
-    const vv_render_mode modes[] = {VV_MODE_COMPOSITE, VV_MODE_MIP};
-    for (int m = 0; m < 2; m++) {
+    /* attenuated MIP (0.5): the bricks' maxima and exponents combined
+     * front to back (VV_REGION_ATTENUATED_MAX), up to the rounding of the
+     * products, as raycast's regions (test_attenuated_regions: >= 50 dB) */
+    const vv_render_mode modes[] = {VV_MODE_COMPOSITE, VV_MODE_MIP, VV_MODE_ATTENUATED_MIP};
+    static const char *const names[] = {"ct_head_paged_composite", "ct_head_paged_mip",
+                                        "ct_head_paged_attenuated"};
+    w->objects[0]->attenuation = 0.5;
+    for (int m = 0; m < 3; m++) {
         w->objects[0]->mode = modes[m];
         vv_image *a = render("gpu", w, NULL), *b = render("gpu", w, paged);
         const double db = vt_image_psnr(a, b, NULL);
         printf("# mode %d: bricks within 2 MiB of the device against the whole: %.1f dB\n",
                (int)modes[m], db);
-        assert_true(db >= (m == 0 ? 50 : 60));
-        save(b, m == 0 ? "ct_head_paged_composite" : "ct_head_paged_mip");
+        assert_true(db >= (m == 1 ? 60 : 50));
+        save(b, names[m]);
         vv_image_free(a);
         vv_image_free(b);
     }

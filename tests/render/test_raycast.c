@@ -485,11 +485,7 @@ test_attenuated_mip_analytic(void **state) {
         vv_object *o = add_object(w, v, VV_MODE_ATTENUATED_MIP);
         o->step = step;
         o->attenuation = atts[a];
-        vv_tf_init(&o->tf);
-        vt_ok(vv_tf_add_opacity(&o->tf, lo, 1.0));
-        vt_ok(vv_tf_add_opacity(&o->tf, hi, 1.0));
-        vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 0)));
-        vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 1)));
+        vt_tf_grey(&o->tf, lo, hi);
         int at = -1;
         const double want = vt_napari_attenuated_mip(samples, ns, lo, hi, atts[a], step, &at);
         double grey = (want - lo) / (hi - lo);
@@ -550,11 +546,7 @@ test_attenuated_mip_zero_is_mip(void **state) {
             vv_world *w = new_world();
             vv_object *o = add_object(w, v, m ? VV_MODE_ATTENUATED_MIP : VV_MODE_MIP);
             o->attenuation = 0;
-            vv_tf_init(&o->tf);
-            vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.3 * (hi - lo), 0.2));
-            vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.97 * (hi - lo), 1.0));
-            vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 1)));
-            vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 0)));
+            vt_tf_flat_ends(&o->tf, lo, hi);
             /* a turned view: rays not along the grid */
             vv_view view = ortho_z(0.5 * (n - 1), 0.5 * (n - 1), 64.0, 1.5 * n, 48, 40);
             view.at = vv_vec3_make(0.5 * (n - 1), 0.5 * (n - 1), 0.5 * (d - 1));
