@@ -283,6 +283,56 @@ vt_image_psnr(const vv_image *a, const vv_image *b, int *identical) {
 }
 
 double
+vt_image_diff(const vv_image *a, const vv_image *b, double *mean) {
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    const size_t n = 4 * (size_t)a->width * (size_t)a->height;
+    double m = 0, sum = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double d = fabs((double)a->rgba[i] - (double)b->rgba[i]);
+        m = d > m ? d : m;
+        sum += d;
+    }
+    if (mean)
+        *mean = n ? sum / (double)n : 0;
+    return m;
+}
+
+void
+vt_tf_grey(vv_tf *tf, double lo, double hi) {
+    vv_tf_init(tf);
+    vt_ok(vv_tf_add_opacity(tf, lo, 1.0));
+    vt_ok(vv_tf_add_opacity(tf, hi, 1.0));
+    vt_ok(vv_tf_add_color(tf, lo, vv_vec3_make(0, 0, 0)));
+    vt_ok(vv_tf_add_color(tf, hi, vv_vec3_make(1, 1, 1)));
+}
+
+void
+vt_tf_flat_ends(vv_tf *tf, double lo, double hi) {
+    vv_tf_init(tf);
+    vt_ok(vv_tf_add_opacity(tf, lo + 0.3 * (hi - lo), 0.2));
+    vt_ok(vv_tf_add_opacity(tf, lo + 0.97 * (hi - lo), 1.0));
+    vt_ok(vv_tf_add_color(tf, lo, vv_vec3_make(0, 0, 1)));
+    vt_ok(vv_tf_add_color(tf, hi, vv_vec3_make(1, 1, 0)));
+}
+
+double
+vt_napari_attenuated_mip(const double *vals, int n, double lo, double hi, double att, double step,
+                         int *at) {
+    double sum = 0, best = -INFINITY;
+    for (int i = 0; i < n; i++) {
+        const double u = (vals[i] - lo) / (hi - lo);
+        sum += u < 0 ? 0 : u > 1 ? 1 : u;
+        const double x = vals[i] * exp(-att * (sum - 1) / step);
+        if (x > best) {
+            best = x;
+            *at = i;
+        }
+    }
+    return best;
+}
+
+double
 vt_png_psnr(const char *a, const char *b) {
     vv_image *x = NULL, *y = NULL;
     vt_ok(vv_image_read_png(&x, a));

@@ -173,6 +173,31 @@ double vt_png_psnr(const char *a, const char *b);
 /** PSNR in dB of two images of one size over their float RGBA channels
  * (INFINITY when equal); *@p identical (may be NULL): 1 when bit for bit. */
 double vt_image_psnr(const vv_image *a, const vv_image *b, int *identical);
+/** The largest and the mean absolute difference of two images of one size
+ * over their float RGBA channels (*@p mean may be NULL); returns the largest. */
+double vt_image_diff(const vv_image *a, const vv_image *b, double *mean);
+
+/**
+ * napari's attenuated MIP of one ray, computed from its formula (VisPy's
+ * volume shader), independently of the renderers: the @p n sample values
+ * @p vals front to back, S the running sum of clamp((v - lo) / (hi - lo),
+ * 0, 1), each value scaled by exp(-att (S - 1) / step); returns the largest
+ * scaled value, *@p at the index of its sample (the first of equals).
+ */
+/** @p tf made an opaque grey ramp over [@p lo, @p hi]: opacity 1 at both
+ * ends (napari's contrast limits for attenuated MIP), colour black at lo to
+ * white at hi, so a projection's pixel is its value's grey; fails the test
+ * on error. */
+void vt_tf_grey(vv_tf *tf, double lo, double hi);
+
+/** @p tf made a ramp with flat ends over a volume's range [@p lo, @p hi]:
+ * opacity 0.2 at 30 % of it rising to 1 at 97 %, colour blue at lo to
+ * yellow at hi (MIP then starts at one flat end and stops at the other);
+ * fails the test on error. */
+void vt_tf_flat_ends(vv_tf *tf, double lo, double hi);
+
+double vt_napari_attenuated_mip(const double *vals, int n, double lo, double hi, double att,
+                                double step, int *at);
 
 /** Default-scene options (vv_world_new_for_volume, _for_grid) of a
  * @p size x @p size view from azimuth 30 and elevation 20 degrees, the

@@ -564,7 +564,7 @@ cli_render_print_options(FILE *out) {
             "                   minip (minimum intensity projection), xray (average\n"
             "                   along the ray), iso (shaded isosurface) or attenuated-mip\n"
             "                   (napari's attenuated MIP: far values fade behind bright\n"
-            "                   ones; raycast only); for a scene,\n"
+            "                   ones; raycast and gpu); for a scene,\n"
             "                   applies to every volume object (geometric objects have none)\n"
             "  --iso V          isovalue for --mode iso (alone it implies --mode iso)\n"
             "  --attenuation A  attenuation of --mode attenuated-mip, >= 0 (default 0.05,\n"

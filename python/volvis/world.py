@@ -647,7 +647,8 @@ class Object:
     @property
     def mode(self):
         """"composite", "mip", "minip", "xray", "iso" or "attenuated-mip"
-        (napari's attenuated MIP, drawn by raycast; see ``attenuation``)."""
+        (napari's attenuated MIP, drawn by raycast and gpu; see
+        ``attenuation``)."""
         return _MODE_NAMES.get(self._c.mode, "composite")
 
     @mode.setter

@@ -244,6 +244,36 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
     *depth = (float)tbest;
 }
 
+vv_status
+vv_vatten_prepare(vv_vatten *a, const vv_object *obj, const vv_vcache *c, float dt) {
+    if (!(obj->attenuation >= 0) || !isfinite(obj->attenuation))
+        return vv_error_set(VV_ERR_INVALID, "object '%s': attenuation must be >= 0, got %g",
+                            obj->name, obj->attenuation);
+    /* the normalisation of napari's sum, its contrast limits: the span of
+     * the transfer function's opacity points (a contrast ramp's, or
+     * napari's table over its limits), else the volume's range */
+    const vv_tf *tf = &obj->tf;
+    double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    if (tf->n_opacity >= 2 && tf->opacity[tf->n_opacity - 1].value > tf->opacity[0].value) {
+        lo = tf->opacity[0].value;
+        hi = tf->opacity[tf->n_opacity - 1].value;
+    }
+    if (!(hi > lo))
+        hi = lo + 1;
+    a->lo = (float)(lo - c->qoff);
+    a->inv_range = (float)(1.0 / (hi - lo));
+    a->qoff = (float)c->qoff;
+    float vmax = -INFINITY;
+    for (size_t g = 0; g < (size_t)c->gx * (size_t)c->gy * (size_t)c->gz; g++)
+        vmax = c->gmax[g] > vmax ? c->gmax[g] : vmax;
+    a->vmax = vmax;
+    /* napari's relative step: the frame's step in units of the object's
+     * smallest voxel spacing */
+    const double rel = dt * obj->step / vv_vobject_step(obj);
+    a->k = obj->attenuation / rel;
+    return VV_OK;
+}
+
 void
 vv_vray_attenuated_mip(const vv_vcache *c, const vv_vray *r, double dt, const vv_vatten *a,
                        float *value, float *depth) {

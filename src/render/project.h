@@ -170,6 +170,18 @@ typedef struct vv_vatten {
     double k;
 } vv_vatten;
 
+/* The vv_vatten of volume object @p obj in attenuated-mip mode, drawn from
+ * cache @p c (its volume's, or a region's voxels) at the frame's sample
+ * step @p dt (world units, as the frame holds it): the contrast limits
+ * (the span of the transfer function's opacity points, a contrast ramp's
+ * or napari's limits, else the volume's range; [lo, lo + 1] when that
+ * spans nothing), c's offset and largest stored value (its groups' max),
+ * and k = attenuation / relative step, the relative step being dt in units
+ * of obj's smallest voxel spacing times its step. The ray caster and the
+ * gpu renderer share it, so their images agree. Errors: VV_ERR_INVALID
+ * (an attenuation below 0 or not finite). Thread-safe; reads @p c only. */
+vv_status vv_vatten_prepare(vv_vatten *a, const vv_object *obj, const vv_vcache *c, float dt);
+
 /* The attenuated maximum intensity projection of ray r (napari's, VisPy's
  * volume shader): over the samples t = j dt in order (one in the middle of
  * a ray shorter than a step), S accumulates each sample's normalised value

@@ -178,12 +178,7 @@ images_identical(const vv_image *a, const vv_image *b) {
 
 static double
 max_abs_diff(const vv_image *a, const vv_image *b) {
-    double m = 0;
-    for (size_t i = 0; i < 4 * (size_t)a->width * (size_t)a->height; i++) {
-        double d = fabs((double)a->rgba[i] - (double)b->rgba[i]);
-        m = d > m ? d : m;
-    }
-    return m;
+    return vt_image_diff(a, b, NULL);
 }
 
 static void
@@ -456,27 +451,6 @@ test_projection_flat_ends(void **state) {
 /* ---------------------------------------------------------------------- */
 /* Attenuated MIP (napari's)                                                */
 
-/* napari's attenuated MIP of one column, computed here from its formula
- * (VisPy's volume shader): the samples front to back, S the running sum of
- * clamp((v - lo) / (hi - lo), 0, 1), each value scaled by
- * exp(-att (S - 1) / step), the largest scaled value; *at the index of its
- * sample. */
-static double
-napari_attenuated_mip(const double *vals, int n, double lo, double hi, double att, double step,
-                      int *at) {
-    double sum = 0, best = -INFINITY;
-    for (int i = 0; i < n; i++) {
-        double u = (vals[i] - lo) / (hi - lo);
-        sum += u < 0 ? 0 : u > 1 ? 1 : u;
-        const double x = vals[i] * exp(-att * (sum - 1) / step);
-        if (x > best) {
-            best = x;
-            *at = i;
-        }
-    }
-    return best;
-}
-
 /* A bright voxel (1.0, at z = 5) behind a dimmer slab (0.6, z = 14..21) in
  * every column of a 16 x 16 x 24 volume, seen down -z: every pixel shows
  * napari's value through a grey ramp over the contrast limits [0.1, 1]
@@ -511,13 +485,9 @@ test_attenuated_mip_analytic(void **state) {
         vv_object *o = add_object(w, v, VV_MODE_ATTENUATED_MIP);
         o->step = step;
         o->attenuation = atts[a];
-        vv_tf_init(&o->tf);
-        vt_ok(vv_tf_add_opacity(&o->tf, lo, 1.0));
-        vt_ok(vv_tf_add_opacity(&o->tf, hi, 1.0));
-        vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 0)));
-        vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 1)));
+        vt_tf_grey(&o->tf, lo, hi);
         int at = -1;
-        const double want = napari_attenuated_mip(samples, ns, lo, hi, atts[a], step, &at);
+        const double want = vt_napari_attenuated_mip(samples, ns, lo, hi, atts[a], step, &at);
         double grey = (want - lo) / (hi - lo);
         grey = grey < 0 ? 0 : grey > 1 ? 1 : grey;
         /* the bright voxel's sample is number 2 (d - 1 - 5) */
@@ -576,11 +546,7 @@ test_attenuated_mip_zero_is_mip(void **state) {
             vv_world *w = new_world();
             vv_object *o = add_object(w, v, m ? VV_MODE_ATTENUATED_MIP : VV_MODE_MIP);
             o->attenuation = 0;
-            vv_tf_init(&o->tf);
-            vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.3 * (hi - lo), 0.2));
-            vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.97 * (hi - lo), 1.0));
-            vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 1)));
-            vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 0)));
+            vt_tf_flat_ends(&o->tf, lo, hi);
             /* a turned view: rays not along the grid */
             vv_view view = ortho_z(0.5 * (n - 1), 0.5 * (n - 1), 64.0, 1.5 * n, 48, 40);
             view.at = vv_vec3_make(0.5 * (n - 1), 0.5 * (n - 1), 0.5 * (d - 1));

@@ -35,12 +35,15 @@
  * them); what the cache saves is the upload and the gradient codes.
  *
  * Draws one volume object (up to GPU_MAX_CH channels under the blend
- * rules) in composite, MIP, MinIP, X-ray and iso mode with a 1-D or 2-D
- * transfer function or a threshold, shading, lights and cut planes; regions
- * (the out-of-core drivers); a volume over option device_memory_mb or the
- * device's 3-D image side brick by brick. Refused in one line: several
- * volume objects, more channels, channels by regions or by bricks, solid
- * and image textures and label colours (raycast draws them).
+ * rules) in composite, MIP, MinIP, X-ray, iso and attenuated-MIP mode
+ * (napari's: the ray caster's parameters, vv_vatten_prepare, and
+ * definition, project.c; regions give VV_REGION_ATTENUATED_MAX's maxima
+ * and exponent sums) with a 1-D or 2-D transfer function or a threshold,
+ * shading, lights and cut planes; regions (the out-of-core drivers); a
+ * volume over option device_memory_mb or the device's 3-D image side
+ * brick by brick. Refused in one line: several volume objects, more
+ * channels, channels by regions or by bricks, solid and image textures and
+ * label colours (raycast draws them).
  * Thread-safety: a renderer serves one render at a time (render.h).
  */
 #include <math.h>
@@ -89,6 +92,8 @@ typedef struct gpu_ubo {
     float chq[GPU_MAX_CH][4];   /* per channel: MIP stop */
     int32_t chf[GPU_MAX_CH][4]; /* per channel: F_INTEGER | F_NORMALS */
     int32_t chn[4];             /* channels (0: one-channel object), blend rule */
+    float att[4];               /* attenuated MIP (vv_vatten): lo, inv_range, qoff, vmax */
+    float attk[4]; /* its k, a region's exponent per sample (k step_scale), 1: early stop */
 } gpu_ubo;
 
 /* the frame's flags (misc[3]) and a channel's (chf[k][0]) */
@@ -733,11 +738,9 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
             vec4_of(u.planes[p], planes[p].n);
             u.planes[p][3] = (float)planes[p].d;
         }
-        const int modes[] = {[VV_MODE_COMPOSITE] = 0,
-                             [VV_MODE_MIP] = 1,
-                             [VV_MODE_MINIP] = 2,
-                             [VV_MODE_XRAY] = 3,
-                             [VV_MODE_ISO] = 4};
+        const int modes[] = {
+            [VV_MODE_COMPOSITE] = 0, [VV_MODE_MIP] = 1, [VV_MODE_MINIP] = 2,
+            [VV_MODE_XRAY] = 3,      [VV_MODE_ISO] = 4, [VV_MODE_ATTENUATED_MIP] = 5};
         u.dims[0] = c->nx;
         u.dims[1] = c->ny;
         u.dims[2] = c->nz;
@@ -766,9 +769,32 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                 u.rect[3] = rg->y1;
             }
         }
-        if (rg && mode == VV_MODE_XRAY) {
-            /* the table that classifies the summed means (vv_xray_table_classify) */
-            st->xray.lut_lo = tab->lut_lo;
+        if (mode == VV_MODE_ATTENUATED_MIP && !multi) {
+            /* napari's attenuated MIP, the ray caster's parameters (a
+             * multi-channel object is drawn by its blend rule, as raycast
+             * draws it) */
+            vv_vatten att;
+            if ((s = vv_vatten_prepare(&att, obj, c, (float)dt)) != VV_OK) {
+                for (int k = 0; k < nch; k++)
+                    if (owns[k])
+                        vv_vtables_free(&tabs[k]);
+                return s;
+            }
+            u.att[0] = att.lo;
+            u.att[1] = att.inv_range;
+            u.att[2] = att.qoff;
+            u.att[3] = att.vmax;
+            u.attk[0] = (float)att.k;
+            /* a region's exponents weigh its step against the finest level's */
+            u.attk[1] = (float)(att.k * (rg && rg->step_scale > 0 ? rg->step_scale : 1));
+            /* (a real maximum below 0 grows as its scale shrinks: no early stop) */
+            u.attk[2] = (double)att.vmax + (double)att.qoff >= 0 ? 1.0f : 0.0f;
+        }
+        if (rg && (mode == VV_MODE_XRAY || mode == VV_MODE_ATTENUATED_MIP)) {
+            /* the table that classifies the summed means (vv_xray_table_classify),
+             * or the attenuated maxima, whose keys are real values (value + qoff) */
+            st->xray.lut_lo =
+                tab->lut_lo + (mode == VV_MODE_ATTENUATED_MIP ? (float)c->qoff : 0.0f);
             st->xray.lut_scale = tab->lut_scale;
             memcpy(st->xray.lut, tab->lut, sizeof st->xray.lut);
         }
@@ -1253,10 +1279,10 @@ const vv_renderer_ops vv_gpu_ops = {
         {
             .name = "gpu",
             .description = "direct volume ray casting on a Vulkan device (a GPU, or lavapipe): "
-                           "composite, mip, minip, xray, iso; one volume object of up to 4 "
-                           "channels",
+                           "composite, mip, minip, xray, iso, attenuated-mip; one volume object of "
+                           "up to 4 channels",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME),
-            .modes = VV_MODES_ALL,
+            .modes = VV_MODES_ALL | VV_MODE_BIT(VV_MODE_ATTENUATED_MIP),
             .caps = GPU_CAPS,
             .quality = "every quality casts one ray a pixel at the objects' step",
             .options = gpu_options,

@@ -12,7 +12,9 @@
  * compositing with early ray termination; leaps over cubes of subvolumes
  * the transfer function hides (their chessboard distance); MIP and MinIP
  * with the table's flat ends and the subvolumes' min/max; the X-ray mean;
- * the first isosurface crossing refined by ten bisections.
+ * napari's attenuated MIP (project.c vv_vray_attenuated_mip, and by
+ * regions vv_vray_attenuated_region_pixel); the first isosurface crossing
+ * refined by ten bisections.
  * Levoy, "Display of Surfaces from Volume Data", IEEE CG&A 1988; the VolVis
  * paper, section 5 (volume ray casting) and section 4 (PARC subvolumes).
  */
@@ -21,6 +23,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 const int MODE_COMPOSITE = 0, MODE_MIP = 1, MODE_MINIP = 2, MODE_XRAY = 3, MODE_ISO = 4;
+const int MODE_ATTENUATED_MIP = 5;
 /* the frame's flags (misc.w) and a channel's (chf[ch].x) */
 const int F_SHADING = 1, F_SKIPPING = 4, F_LUT2D = 32;
 const int F_NORMALS = 2, F_INTEGER = 16;
@@ -53,6 +56,8 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 chq[MAX_CH];              /* per channel: MIP stop */
     ivec4 chf[MAX_CH];             /* per channel: F_INTEGER | F_NORMALS */
     ivec4 chn;                     /* channels (0: one-channel object), blend rule */
+    vec4 att;                      /* attenuated MIP: lo, inv_range, qoff, vmax (project.h) */
+    vec4 attk;                     /* its k, a region's k step_scale, 1: early stop */
 } fr;
 
 layout(set = 0, binding = 1) uniform sampler3D vol;   /* stored values (R16 unorm or R32F) */
@@ -391,6 +396,8 @@ main() {
     }
     bool xsum = false;          /* a region's X-ray sum (key, remainder, count) */
     float xs = 0.0, xr = 0.0, xn = 0.0, xdepth = INF;
+    bool asum = false;          /* a region's attenuated maximum (key, exponent sum) */
+    float am = NAN, ae = 0.0, adepth = INF;
     if (hit) {
         tb = t0;
         o_i = oi + t0 * di;
@@ -620,6 +627,98 @@ main() {
                 A = 1.0;
                 depth = th;
             }
+        } else if (mode == MODE_ATTENUATED_MIP) {
+            /* napari's attenuated MIP (VisPy's volume shader), as project.c
+             * computes it: front to back, S the running sum of the samples'
+             * contrast-normalised values n = clamp((v - lo) inv_range, 0, 1),
+             * each real value v + qoff scaled by exp(-k (S - 1)), S
+             * including the sample; the largest scaled value, classified as
+             * MIP's maximum. Every sample is taken (no skipping). S is a
+             * compensated float sum (project.c: a double). */
+            const float lo = fr.att.x, inv_range = fr.att.y, qoff = fr.att.z, vmax = fr.att.w;
+            const float ka = fr.attk.x;
+            const float k0 = ceil(t0 / dt);
+            float k = k0;
+            float kend = floor(t1 / dt);
+            const bool shortray = k > kend;
+            if (region) {
+                k = max(k, ceil(ra / dt));
+                kend = min(kend, floor(rb / dt));
+            }
+            if (!region) {
+                float value, tbest;
+                if (shortray) {
+                    /* one sample, in the middle: S is its own normalised value */
+                    const float tm = 0.5 * (t0 + t1);
+                    const float x = sample_at(point_at(tm));
+                    const float n = clamp((x - lo) * inv_range, 0.0, 1.0);
+                    const float f = ka == 0.0 ? 1.0 : exp(-ka * (n - 1.0));
+                    value = x * f + qoff * (f - 1.0);
+                    tbest = tm;
+                } else {
+                    float best = -INF;
+                    precise float sum = 0.0, comp = 0.0; /* (not re-associated) */
+                    tbest = k * dt;
+                    const bool stop = fr.attk.z > 0.5;
+                    for (; k <= kend; k += 1.0) {
+                        const float t = k * dt;
+                        const float x = sample_at(point_at(t));
+                        const float n = clamp((x - lo) * inv_range, 0.0, 1.0);
+                        precise const float y = n - comp; /* Kahan's sum */
+                        precise const float sm = sum + y;
+                        comp = (sm - sum) - y;
+                        sum = sm;
+                        /* (x + qoff) f - qoff, so that f == 1 gives x exactly */
+                        const float f = ka == 0.0 ? 1.0 : exp(-ka * (sum - 1.0));
+                        const float xs2 = x * f + qoff * (f - 1.0);
+                        if (xs2 > best) {
+                            best = xs2;
+                            tbest = t;
+                        }
+                        /* every later sample is at most vmax, scaled by at most f */
+                        if (stop && vmax * f + qoff * (f - 1.0) <= best)
+                            break;
+                    }
+                    value = best;
+                }
+                const vec4 e = entry(value);
+                P = e.yzw * e.x;
+                PA = e.x;
+                pdepth = tbest;
+            } else {
+                /* a region (VV_REGION_ATTENUATED_MAX): its exponents summed
+                 * from 0, E = sum of k w n (w the region's step_scale); a
+                 * sample's real value scaled by exp(k - E'), E' the samples'
+                 * before it plus k n (itself counted once, as a sample of
+                 * the finest level); the largest (real units) and E */
+                const float ke = fr.attk.y;
+                float best = -INF;
+                precise float e = 0.0, comp = 0.0; /* (not re-associated) */
+                bool any = false;
+                for (float j = shortray ? 0.0 : k; j <= (shortray ? 0.0 : kend); j += 1.0) {
+                    const float t = shortray ? 0.5 * (t0 + t1) : j * dt;
+                    if (!owned(t))
+                        continue;
+                    any = true;
+                    const float x = sample_at(point_at(t));
+                    const float n = clamp((x - lo) * inv_range, 0.0, 1.0);
+                    const float sc = ka == 0.0 ? 1.0 : exp(ka - (e + ka * n));
+                    const float m = (x + qoff) * sc;
+                    if (m > best) {
+                        best = m;
+                        adepth = t;
+                    }
+                    precise const float y = ke * n - comp; /* Kahan's sum */
+                    precise const float sm = e + y;
+                    comp = (sm - e) - y;
+                    e = sm;
+                }
+                asum = true;
+                if (any) {
+                    am = best;
+                    ae = e;
+                }
+            }
         } else {
             /* projections: MIP, MinIP, X-ray (project.h) */
             const float k0 = ceil(t0 / dt);
@@ -715,6 +814,15 @@ main() {
                 xdepth = INF;
             }
         }
+    }
+    if (asum) {
+        /* VV_REGION_ATTENUATED_MAX: the largest attenuated value (real
+         * units) as key, the exponents' sum in red; classified once the
+         * regions are combined (vv_region_image_finish) */
+        out_rgba[at] = vec4(ae, 0.0, 0.0, 0.0);
+        out_depth[at] = adepth;
+        out_key[at] = am;
+        return;
     }
     if (xsum) {
         /* VV_REGION_SUM: the sum as key and remainder, the count; classified

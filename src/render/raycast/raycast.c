@@ -967,30 +967,6 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
             fr->stats->gradients_at_samples++;
     }
     ro->iso = (float)(obj->isovalue - ro->c->qoff);
-    if (ro->mode == VV_MODE_ATTENUATED_MIP) {
-        if (!(obj->attenuation >= 0) || !isfinite(obj->attenuation))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': attenuation must be >= 0, got %g",
-                                obj->name, obj->attenuation);
-        /* the normalisation of napari's sum, its contrast limits: the span
-         * of the transfer function's opacity points (a contrast ramp's, or
-         * napari's table over its limits), else the volume's range */
-        const vv_tf *tf = &obj->tf;
-        double lo = obj->volume->range[0], hi = obj->volume->range[1];
-        if (tf->n_opacity >= 2 && tf->opacity[tf->n_opacity - 1].value > tf->opacity[0].value) {
-            lo = tf->opacity[0].value;
-            hi = tf->opacity[tf->n_opacity - 1].value;
-        }
-        if (!(hi > lo))
-            hi = lo + 1;
-        ro->att.lo = (float)(lo - ro->c->qoff);
-        ro->att.inv_range = (float)(1.0 / (hi - lo));
-        ro->att.qoff = (float)ro->c->qoff;
-        const vv_vcache *c = ro->c;
-        float vmax = -INFINITY;
-        for (size_t g = 0; g < (size_t)c->gx * (size_t)c->gy * (size_t)c->gz; g++)
-            vmax = c->gmax[g] > vmax ? c->gmax[g] : vmax;
-        ro->att.vmax = vmax;
-    }
     return VV_OK;
 }
 
@@ -1295,13 +1271,9 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
         objs[i].dt = fr.dt;
-        if (objs[i].mode == VV_MODE_ATTENUATED_MIP && !objs[i].nch) {
-            /* napari's relative step: the frame's step in units of the
-             * object's smallest voxel spacing */
-            const vv_object *ob = objs[i].obj;
-            const double rel = fr.dt * ob->step / vv_vobject_step(ob);
-            objs[i].att.k = ob->attenuation / rel;
-        }
+        if (objs[i].mode == VV_MODE_ATTENUATED_MIP && !objs[i].nch &&
+            (s = vv_vatten_prepare(&objs[i].att, objs[i].obj, objs[i].c, fr.dt)) != VV_OK)
+            break;
         if (objs[i].nch)
             continue; /* its channels have the tables */
         s = prepare_tables(&fr, &objs[i]);
