@@ -1,21 +1,29 @@
-"""volvis.widgets.View in a real JupyterLab 4 driven by Debian's Chromium
-(test_python_widget_jupyterlab): the test starts `jupyter lab` of .venv on
-a free port with a token, a temporary root folder and its own Jupyter
-folders, opens a notebook in headless Chromium (selenium with Debian's
-chromedriver), runs the View cell, waits for the widget's first full frame,
-drags on it with the mouse (ActionChains), and checks that the canvas shows
-a different image, that the frames while dragging were reduced ones, that
-a full frame follows the drag, and that the camera the next cell prints
-(the Python side's eye trait) moved at the same distance from the look-at
-point; then the wheel and a two-finger touch pinch (WebDriver touch
+"""volvis.widgets.View in a real JupyterLab 4 or Jupyter Notebook 7 driven by
+Debian's Chromium (test_python_widget_jupyterlab, test_python_widget_notebook7):
+the test starts `jupyter lab` (or `jupyter notebook`) of .venv on a free port
+with a token, a temporary root folder and its own Jupyter folders, opens a
+notebook in headless Chromium (selenium with Debian's chromedriver) at
+/lab/tree/NAME.ipynb (or Notebook 7's /notebooks/NAME.ipynb), checks that the
+page is the front end asked for (its #jupyter-config-data: appName,
+appVersion, notebookPage), runs the View cell, waits for the widget's first
+full frame, drags on it with the mouse (ActionChains), and checks that the
+canvas shows a different image, that the frames while dragging were
+reduced ones, that a full frame follows the drag, and that the camera the
+next cell prints (the Python side's eye trait) moved at the same distance
+from the look-at point; then the wheel and a two-finger touch pinch (WebDriver touch
 pointers) and the + key must zoom by 1.1^3 (300 px of wheel) times 3 (the
 fingers' final over first distance) times 1.1; the mode and preset menus
-and the axial slice slider must set their traits. Screenshots of the notebook go to OUT_DIR
-(lab_before.png, lab_after.png, lab_zoomed.png). The server and the browser are
-stopped whatever happens.
+and the axial slice slider must set their traits. Both front ends are
+JupyterLab's notebook components (the same .jp-Notebook, .jp-Cell and
+.jp-OutputArea-output elements and the toolbar's execution indicator), so
+one script drives both; what differs is in FRONTS. Screenshots of the
+notebook go to OUT_DIR (FRONT_before.png, FRONT_after.png,
+FRONT_zoomed.png, FRONT_failed.png on a failure). The server and the
+browser are stopped whatever happens.
 
-Usage: widget_jupyterlab.py [BUILD_PYTHON_DIR OUT_DIR]. Exit 77 when
-jupyterlab, selenium, anywidget, chromium or chromedriver is missing."""
+Usage: widget_jupyterlab.py [BUILD_PYTHON_DIR OUT_DIR [lab|notebook]] (default
+lab). Exit 77 when jupyterlab (lab), notebook 7 (notebook), selenium,
+anywidget, chromium or chromedriver is missing."""
 import base64
 import json
 import os
@@ -32,12 +40,42 @@ import urllib.request
 import widget_setup
 from widget_setup import HEAD
 
+# The front ends: the test's name (its default output folder), the Python
+# module whose `python -m` is the server, the notebook's address under the
+# server, and what the page's configuration (#jupyter-config-data) must say:
+# appName, the start of appVersion, notebookPage. Notebook 7's server loads
+# JupyterLab's server extension too (it serves /lab beside /notebooks), so
+# the LabApp options below (no extension manager fetching from PyPI, no
+# update check) apply to both.
+FRONTS = {
+    "lab": dict(name="widget_jupyterlab", module="jupyterlab", title="JupyterLab 4",
+                path="/lab/tree/widget.ipynb", app="JupyterLab", version="4.", page=None),
+    "notebook": dict(name="widget_notebook7", module="notebook", title="Notebook 7",
+                     path="/notebooks/widget.ipynb", app="Jupyter Notebook", version="7.",
+                     page="notebooks"),
+}
+FRONT = sys.argv[3] if len(sys.argv) > 3 else "lab"
+if FRONT not in FRONTS:
+    raise SystemExit("widget_jupyterlab: unknown front end %r (lab or notebook)" % FRONT)
+NAME = FRONTS[FRONT]["name"]
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 CHROMEDRIVER = shutil.which("chromedriver") or "/usr/bin/chromedriver"
+
+
+def missing():
+    """Why the test cannot run here beyond a missing module, or None."""
+    if not (os.path.exists(CHROMIUM) and os.path.exists(CHROMEDRIVER)):
+        return "chromium or chromedriver is missing (apt-get install chromium chromium-driver)"
+    if FRONT == "notebook":
+        import notebook
+        if int(notebook.__version__.split(".")[0]) != 7:
+            return "notebook %s is not Notebook 7" % notebook.__version__
+    return None
+
+
 PYDIR, OUT, _ = widget_setup.start(
-    "widget_jupyterlab", ["anywidget", "jupyterlab", "nbformat", "selenium.webdriver"],
-    extra_skip=lambda: None if os.path.exists(CHROMIUM) and os.path.exists(CHROMEDRIVER) else
-    "chromium or chromedriver is missing (apt-get install chromium chromium-driver)")
+    NAME, ["anywidget", FRONTS[FRONT]["module"], "nbformat", "selenium.webdriver"],
+    n_args=2, extra_skip=missing)
 import nbformat  # noqa: E402
 from selenium import webdriver  # noqa: E402
 from selenium.webdriver.chrome.options import Options  # noqa: E402
@@ -95,7 +133,7 @@ CELLS = [
 
 OUT.mkdir(parents=True, exist_ok=True)
 t0 = time.monotonic()
-tmp = tempfile.mkdtemp(prefix="volvis-lab-")
+tmp = tempfile.mkdtemp(prefix="volvis-%s-" % FRONT)
 rootdir = pathlib.Path(tmp, "root")
 rootdir.mkdir()
 nb = nbformat.v4.new_notebook()
@@ -110,8 +148,8 @@ env = dict(os.environ, PYTHONPATH=str(PYDIR), JUPYTER_CONFIG_DIR=tmp + "/config"
            IPYTHONDIR=tmp + "/ipython", HOME=tmp)
 log = open(OUT / "server.log", "w")
 server = subprocess.Popen(
-    [sys.executable, "-m", "jupyterlab", "--no-browser", "--ip=127.0.0.1", "--port=%d" % port,
-     "--ServerApp.port_retries=0", "--IdentityProvider.token=%s" % token,
+    [sys.executable, "-m", FRONTS[FRONT]["module"], "--no-browser", "--ip=127.0.0.1",
+     "--port=%d" % port, "--ServerApp.port_retries=0", "--IdentityProvider.token=%s" % token,
      "--ServerApp.root_dir=%s" % rootdir, "--allow-root", "--LabApp.extension_manager=readonly",
      "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate"],
     env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
@@ -121,11 +159,11 @@ try:
 
     def up():
         if server.poll() is not None:
-            raise SystemExit("widget_jupyterlab: FAIL the server exited (%d): see %s"
-                             % (server.returncode, OUT / "server.log"))
+            raise SystemExit("%s: FAIL the server exited (%d): see %s"
+                             % (NAME, server.returncode, OUT / "server.log"))
         with urllib.request.urlopen("%s/api/status?token=%s" % (base, token), timeout=2) as r:
             return r.status == 200
-    wait_until(up, 60, "the JupyterLab server")
+    wait_until(up, 60, "the %s server" % FRONTS[FRONT]["title"])
 
     opts = Options()
     opts.binary_location = CHROMIUM
@@ -134,9 +172,16 @@ try:
         opts.add_argument(a)
     opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
-    driver.get("%s/lab/tree/widget.ipynb?token=%s" % (base, token))
+    driver.get("%s%s?token=%s" % (base, FRONTS[FRONT]["path"], token))
     wait_until(lambda: driver.find_elements(By.CSS_SELECTOR, ".jp-Notebook .jp-Cell"), 90,
                "the notebook")
+    # the page is the front end asked for (the server's page configuration)
+    page = driver.execute_script(
+        "const c = JSON.parse(document.getElementById('jupyter-config-data').textContent);"
+        "return [c.appName, c.appVersion, c.notebookPage || null];")
+    print("page: %s %s (notebookPage %s)" % tuple(page))
+    check(page[0] == FRONTS[FRONT]["app"] and page[1].startswith(FRONTS[FRONT]["version"])
+          and page[2] == FRONTS[FRONT]["page"], "the page is %s" % FRONTS[FRONT]["title"])
     # the kernel is ready when the toolbar's status says idle
     wait_until(lambda: driver.execute_script(
         "const s = document.querySelector('.jp-Notebook-ExecutionIndicator');"
@@ -174,7 +219,7 @@ try:
     driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", canvas)
     time.sleep(0.3)
     before = driver.execute_script("return arguments[0].toDataURL('image/png');", canvas)
-    driver.save_screenshot(str(OUT / "lab_before.png"))
+    driver.save_screenshot(str(OUT / ("%s_before.png" % FRONT)))
 
     # a drag across the view, in steps, as a hand does
     kinds = set()
@@ -189,7 +234,7 @@ try:
     seq1 = wait_until(lambda: sharp_seq() > seq0 and sharp_seq(), 60,
                       "a full frame after the drag")
     after = driver.execute_script("return arguments[0].toDataURL('image/png');", canvas)
-    driver.save_screenshot(str(OUT / "lab_after.png"))
+    driver.save_screenshot(str(OUT / ("%s_after.png" % FRONT)))
     check(after != before, "the canvas shows a different frame after the drag (seq %d -> %d)"
           % (seq0, seq1))
     check(any(k and k.startswith("raycast_1/") for k in kinds),
@@ -219,7 +264,10 @@ try:
     print("stats:", cam1["stats"])
 
     # the wheel (300 px up: 1.1^3 closer) and a two-finger pinch (touch pointers
-    # spreading from 60 to 180 px apart: 3 times closer, the midpoint fixed)
+    # spreading from 60 to 180 px apart: 3 times closer, the midpoint fixed),
+    # on the view scrolled whole into the page again (running cell 1 scrolled
+    # the notebook: the pointers must not land on the toolbar above it)
+    driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", canvas)
     ActionChains(driver).scroll_from_origin(ScrollOrigin.from_element(canvas), 0, -300) \
         .perform()
     seq2 = wait_until(lambda: sharp_seq() > seq1 and sharp_seq(), 60, "a full frame after the wheel")
@@ -238,7 +286,7 @@ try:
     ab.perform()
     seq3 = wait_until(lambda: sharp_seq() > seq2 and sharp_seq(), 60,
                       "a full frame after the pinch")
-    driver.save_screenshot(str(OUT / "lab_zoomed.png"))
+    driver.save_screenshot(str(OUT / ("%s_zoomed.png" % FRONT)))
     # the menus set the mode and preset traits
     Select(driver.find_element(By.CSS_SELECTOR, "select.volvis-mode")).select_by_value("mip")
     wait_until(lambda: sharp_seq() > seq3 and sharp_seq(), 60, "a full frame after the mode")
@@ -266,7 +314,7 @@ try:
           % (cam2["slice_index"], label))
 except BaseException:
     if driver is not None:
-        driver.save_screenshot(str(OUT / "lab_failed.png"))
+        driver.save_screenshot(str(OUT / ("%s_failed.png" % FRONT)))
         print("page: motions sent %s, frames drawn %s" % tuple(driver.execute_script(
             "const r = document.querySelector('.volvis-widget');"
             "return r ? [r.dataset.motions, r.dataset.frames] : [null, null];")))
@@ -290,5 +338,5 @@ finally:
         server.wait(10)
     log.close()
     shutil.rmtree(tmp, ignore_errors=True)
-print("widget_jupyterlab: %.1f s, %d failures" % (time.monotonic() - t0, len(failures)))
+print("%s: %.1f s, %d failures" % (NAME, time.monotonic() - t0, len(failures)))
 sys.exit(1 if failures else 0)
