@@ -236,6 +236,28 @@ def test_widget_attenuated_mip(make_napari_viewer, qtbot, plugin, out_dir):
     assert w.frame["world"].objects[0].attenuation == pytest.approx(0.4)
     assert psnr(img, w.image) < 35, "the frame did not change with the attenuation"
     print("PSNR attenuated_mip: %.2f dB" % p)
+    # with shadows the ray tracer draws it, still in attenuated-mip (in memory):
+    # `volvis render --renderer raytrace` of the same World, not its mip
+    n = w.finals
+    w.shadows.setChecked(True)
+    qtbot.waitUntil(lambda: w.finals > n, timeout=45000)
+    f = dict(w.frame)
+    (o,) = f["world"].objects
+    assert f["renderer"] == "raytrace"
+    assert o.mode == "attenuated-mip" and o.attenuation == pytest.approx(0.4)
+    assert not any("drawn as mip" in x for x in f["notes"]), f["notes"]
+    shadowed = w.image.copy()
+    volvis.save_png(shadowed, str(out_dir / "widget_attenuated_mip_shadows.png"))
+    rt = ("--renderer", "raytrace")
+    ps = psnr(shadowed, _cli_render(f, out_dir, "attenuated_shadows", [DATA / "neghip.slc"], rt))
+    assert ps >= 40, "attenuated_mip with shadows: widget vs volvis render: %.2f dB" % ps
+    f_mip = dict(f)
+    f_mip["world"] = f["world"].clone()
+    f_mip["world"].objects[0].mode = "mip"
+    pm = psnr(shadowed, _cli_render(f_mip, out_dir, "attenuated_shadows_as_mip",
+                                    [DATA / "neghip.slc"], rt))
+    assert pm < 30, "attenuated_mip with shadows drawn as mip (%.2f dB)" % pm
+    print("PSNR attenuated_mip with shadows: %.2f dB (its mip %.2f dB)" % (ps, pm))
 
 
 @pytest.mark.parametrize("rendering", ["mip", "translucent"])

@@ -392,6 +392,60 @@ test_volume_attenuation(void **state) {
     vv_world_free(w);
 }
 
+/* A slab in attenuated-mip mode casting its shadow on the floor: each
+ * shadow ray is one minus the opacity of the slab's projected value,
+ * napari's attenuated maximum along it. The slab holds 1 (one corner voxel
+ * 2, away from the light's paths, so that the table spans 0 .. 2), the
+ * transfer function's opacity rises from 0 at 0 to 1 at 2 (napari's
+ * contrast limits 0 .. 2: a sample of 1 counts 0.5 in the sum S), so the
+ * first sample wins: 1 scaled by exp(-k (0.5 - 1)), k = the attenuation
+ * over napari's relative step (the frame's step is the slab's, o->step
+ * voxels: k = attenuation / o->step), and the floor shows
+ * cos 45 (1 - exp(k / 2) / 2); at attenuation 0, MIP's
+ * cos 45 (1 - 1 / 2), the same as the slab in mip mode. */
+static void
+test_attenuated_mip_shadow(void **state) {
+    (void)state;
+    vv_world *w = new_world();
+    add_directional(w, vv_vec3_make(1, 0, -1), 1.0);
+    vv_object *pl = add_geometry(w, VV_OBJECT_PLANE, "floor");
+    matte(pl, 0, 1);
+    vv_volume *v = constant_volume(41, 11, 11, 1.0);
+    vv_volume_set(v, 0, 0, 0, 2.0);
+    vv_volume_update_range(v);
+    v->origin[2] = 10;
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v, "slab"));
+    vv_volume_free(v);
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, 0, 0));
+    vt_ok(vv_tf_add_opacity(&o->tf, 2, 1));
+    vt_ok(vv_world_add_object(w, o));
+    vv_view view = ortho_view(vv_vec3_make(45, 5, 100), vv_vec3_make(45, 5, 0),
+                              vv_vec3_make(0, 1, 0), 6, 24, 24);
+    vv_renderer *r = new_tracer((const char *const[]){"samples", "1", NULL});
+    const double att[3] = {0.0, 0.25, 0.5};
+    double floor_mip = 0;
+    for (int m = 0; m < 4; m++) {
+        o->mode = m == 3 ? VV_MODE_MIP : VV_MODE_ATTENUATED_MIP;
+        o->attenuation = m == 3 ? 0.05 : att[m];
+        vv_image *img = render_q(r, w, &view, 2, 0);
+        const double got = px(img, 12, 12)[0];
+        const double k = m == 3 ? 0 : att[m] / o->step;
+        const double expect = cos(VV_PI / 4) * (1 - exp(k / 2) / 2);
+        print_message("%s, attenuation %.2f: floor %.5f, cos45 (1 - exp(k/2)/2) = %.5f\n",
+                      m == 3 ? "mip" : "attenuated mip", o->attenuation, got, expect);
+        assert_near(got, expect, 0.01 * expect);
+        if (m == 0)
+            floor_mip = got;
+        if (m == 3)
+            assert_true(got == floor_mip); /* attenuation 0 is MIP bit for bit */
+        vv_image_free(img);
+    }
+    vv_renderer_free(r);
+    vv_world_free(w);
+}
+
 /* A point light above the slab: each floor point's light crosses the
  * slab's whole height on its own slanted path, L = 10 |d| / d_z with d the
  * way to the light, so the floor shows cos(theta) exp(-tau L) pixel by
@@ -664,6 +718,9 @@ test_equals_raycast(void **state) {
     compare_with_raycast("volumes/neghip.slc", VV_MODE_ISO, 40, 128, "neghip_iso");
     compare_with_raycast("volumes/neghip.slc", VV_MODE_MIP, 0, 128, "neghip_mip");
     compare_with_raycast("volumes/neghip.slc", VV_MODE_XRAY, 0, 128, "neghip_xray");
+    /* napari's attenuated MIP (the object's attenuation, 0.05): the ray
+     * caster's function on the same samples */
+    compare_with_raycast("volumes/ct_head.nrrd", VV_MODE_ATTENUATED_MIP, 0, 128, "ct_head_attmip");
 }
 
 /* With AVX2 the one-volume march classifies a chunk of samples at once and
@@ -1198,6 +1255,7 @@ main(void) {
         cmocka_unit_test(test_point_light_shadow),
         cmocka_unit_test(test_flag_casts_shadows),
         cmocka_unit_test(test_volume_attenuation),
+        cmocka_unit_test(test_attenuated_mip_shadow),
         cmocka_unit_test(test_point_light_attenuation),
         cmocka_unit_test(test_mirror_equals_mirrored_camera),
         cmocka_unit_test(test_facing_mirrors_terminate),

@@ -21,8 +21,10 @@ What it maps (napari -> VolVis, each layer one volume object of a World):
   also for a layer drawn out of core (opened by the VolVis reader), whose
   nodes render by regions: each carries its own part of the sum, and the
   nodes combine front to back (docs/rendering.md, "Attenuated MIP"); with
-  shadows it is drawn as mip (the ray tracer draws no attenuated MIP; said
-  in the status line); additive -> composite.
+  shadows the ray tracer draws it (its shadow rays too: one minus the
+  opacity of the attenuated maximum along them), except a layer drawn out
+  of core, drawn as mip then (the ray tracer's regions carry no
+  attenuated sum; said in the status line); additive -> composite.
 - colormap, contrast limits, gamma, opacity: a transfer function of up to
   130 points over the contrast limits (even in t and in t^gamma), colour ``colormap((t)^gamma)`` at data
   value ``lo + t (hi - lo)``; opacity there ``opacity * t^gamma`` per voxel
@@ -378,6 +380,7 @@ class VolVisWidget(QWidget):
         from napari.layers import Image
         world = volvis.World()
         pyramids, notes = [], []
+        out_of_core = set()  # the names of the objects drawn from a pyramid
         additive = {}  # (mode, grid) -> [(layer name, object)]: summed layers
         blend_notes = []
         for layer in self.viewer.layers:
@@ -399,6 +402,7 @@ class VolVisWidget(QWidget):
             world.add(obj)
             if pyr is not None:
                 pyramids.append(pyr)
+                out_of_core.add(obj.name)
             if blending not in ("translucent",):
                 blend_notes.append("%s: blending %s drawn by VolVis's rule"
                                    % (layer.name, blending))
@@ -433,9 +437,10 @@ class VolVisWidget(QWidget):
                 obj.casts_shadows = True
                 obj.receives_shadows = True
                 obj.shading = True
-                if obj.mode == "attenuated-mip":  # raytrace draws no attenuated MIP
-                    obj.mode = "mip"
-                    notes.append("%s: attenuated_mip drawn as mip with shadows" % obj.name)
+                if obj.mode == "attenuated-mip" and obj.name in out_of_core:
+                    obj.mode = "mip"  # raytrace's regions carry no attenuated sum
+                    notes.append("%s: attenuated_mip drawn as mip with shadows (out of core)"
+                                 % obj.name)
         else:
             world.add_light(headlight=True)
         return world, view, ("raytrace" if shadows else "raycast"), mirror, pyramids, notes

@@ -603,6 +603,8 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
     for (int i = 0; i < fr->n_vobj && s == VV_OK; i++) {
         rt_vobj *ro = &fr->vobjs[i];
         s = build_tables(fr, ro);
+        if (s == VV_OK && ro->mode == VV_MODE_ATTENUATED_MIP)
+            s = vv_vatten_prepare(&ro->att, ro->obj, ro->c, fr->dt); /* the ray caster's */
         ro->region_dt = fr->dt;
         ro->inv_form = ro->mode == VV_MODE_COMPOSITE && !ro->extras; /* march_one */
     }
@@ -751,6 +753,11 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
      * steps as shadow bands: iso regions only with the whole volume as the
      * context (distributed rendering of a volume every rank holds) */
     const vv_volume *ctx = w->objects[region->object]->volume;
+    if (part.mode == VV_MODE_ATTENUATED_MIP)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': attenuated-mip regions (out of core, MPI) are drawn by "
+                            "raycast and gpu, not raytrace",
+                            part.name);
     if (part.mode == VV_MODE_ISO &&
         (ctx->dims[0] != region->dims[0] || ctx->dims[1] != region->dims[1] ||
          ctx->dims[2] != region->dims[2]))
@@ -836,7 +843,7 @@ const vv_renderer_ops vv_raytrace_ops = {
             .description = "volumetric ray tracing: volumes and geometry, shadows, mirrors, "
                            "refraction, PARC",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME) | VV_DRAWS_GEOMETRY,
-            .modes = VV_MODES_ALL,
+            .modes = VV_MODES_ALL | VV_MODE_BIT(VV_MODE_ATTENUATED_MIP),
             .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_GLOBAL |
                     VV_RENDERER_CHANNELS,
             .quality = "0: no shadow or secondary rays; 1: every effect; both adaptive "

@@ -174,6 +174,7 @@ typedef struct rt_vobj {
     unsigned lvol_owned;        /* bit l: lvol[l] is this frame's (else the state's cache) */
     unsigned sgrid_owned;       /* bit l: sgrid[l] and sweep[l] are this frame's (else the
                                    state's cache) */
+    vv_vatten att;              /* attenuated-mip mode: napari's parameters (project.h) */
     vv_vextra x;                /* 2-D transfer function and solid texture */
     int extras;                 /* x has something: the general loop handles the object */
     int textured;               /* iso mode: an image texture modulates the base colour */

@@ -146,7 +146,13 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
         }
         return 1.0f;
     }
-    /* projections: one minus the opacity of the projected value */
+    /* projections: one minus the opacity of the projected value (attenuated
+     * MIP: napari's, along the shadow ray from where it enters the volume) */
+    if (ob->mode == VV_MODE_ATTENUATED_MIP) {
+        float val, d;
+        vv_vray_attenuated_mip(c, &r, dt, &ob->att, &val, &d);
+        return val == val ? 1.0f - ob->lut[4 * (int)lut_index_f(ob, val)] : 1.0f;
+    }
     const int mip = ob->mode == VV_MODE_MIP, minip = ob->mode == VV_MODE_MINIP;
     float best = mip ? -INFINITY : INFINITY;
     double sum = 0;

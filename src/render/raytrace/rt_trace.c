@@ -394,16 +394,21 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     *Aout = m.A > 1 ? 1 : m.A;
 }
 
-/* Maximum / minimum intensity projection or X-ray of one volume over the
- * part of the ray in [0, tlim] (vv_vray_project). Returns 0 when the ray
- * misses it. */
+/* Maximum / minimum intensity projection, X-ray or attenuated MIP of one
+ * volume over the part of the ray in [0, tlim] (vv_vray_project,
+ * vv_vray_attenuated_mip: the ray caster's). Returns 0 when the ray misses
+ * it. */
 static int
 project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tlim, float *value,
                float *depth) {
     vv_vray r;
     if (!vray_setup(ob, wr, 0, tlim, &r))
         return 0;
-    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->parc, -INFINITY, INFINITY, value, depth);
+    if (ob->mode == VV_MODE_ATTENUATED_MIP)
+        vv_vray_attenuated_mip(ob->c, &r, fr->dt, &ob->att, value, depth);
+    else
+        vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->parc, -INFINITY, INFINITY, value,
+                        depth);
     return 1;
 }
 
