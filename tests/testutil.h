@@ -224,6 +224,13 @@ vv_image *vt_converged_reference(vv_renderer *r, const vv_world *w, int step_div
 vv_image *vt_render_q(vv_renderer *r, const vv_world *w, int quality, int threads,
                       vv_render_stats *st);
 
+/** A TCP socket listening on 127.0.0.1 at a free port (*port), @p backlog
+ * connections; asserts on failure. For the tests' loopback servers. */
+int vt_listen_loopback(int backlog, int *port);
+
+/** Seconds of CLOCK_MONOTONIC (for the tests' waits). */
+double vt_now(void);
+
 /** Asserts |a - b| <= eps, printing both values on failure. */
 #define assert_near(a, b, eps)                                                                     \
     do {                                                                                           \

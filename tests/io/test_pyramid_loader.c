@@ -25,10 +25,8 @@
  *   for them; asked again once the server answers, every chunk arrives and
  *   the level-0 frame is the local file's bit for bit.
  */
-#include <arpa/inet.h>
 #include <fcntl.h>
 #include <math.h>
-#include <netinet/in.h>
 #include <poll.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -525,16 +523,7 @@ static void
 hold_start(hold_srv *s, const char *root) {
     memset(s, 0, sizeof *s);
     snprintf(s->root, sizeof s->root, "%s", root);
-    s->fd = socket(AF_INET, SOCK_STREAM, 0);
-    assert_true(s->fd >= 0);
-    struct sockaddr_in a = {0};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    assert_int_equal(bind(s->fd, (struct sockaddr *)&a, sizeof a), 0);
-    socklen_t len = sizeof a;
-    assert_int_equal(getsockname(s->fd, (struct sockaddr *)&a, &len), 0);
-    s->port = ntohs(a.sin_port);
-    assert_int_equal(listen(s->fd, 64), 0);
+    s->fd = vt_listen_loopback(64, &s->port);
     assert_int_equal(pthread_create(&s->th, NULL, hold_accept, s), 0);
 }
 
@@ -554,18 +543,11 @@ hold_stop(hold_srv *s) {
     close(s->fd);
 }
 
-static double
-now_s(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Until @p ok(s) or @p seconds pass; 1 when it held. */
 static int
 wait_for(hold_srv *s, int (*ok)(hold_srv *s), double seconds) {
-    const double t0 = now_s();
-    while (!ok(s) && now_s() - t0 < seconds)
+    const double t0 = vt_now();
+    while (!ok(s) && vt_now() - t0 < seconds)
         nap();
     return ok(s);
 }
@@ -602,11 +584,11 @@ test_cancel_in_flight_remote(void **state) {
         fail_msg("the server holds %d of 32 requests", atomic_load(&srv->held));
     /* the view moves on: nothing wanted; the loader is idle as soon as
      * the fetches are dropped, not when the server answers */
-    const double t0 = now_s();
+    const double t0 = vt_now();
     vt_ok(vv_pyramid_request(p, 0, NULL, NULL, NULL));
-    while (vv_pyramid_loading(p) > 0 && now_s() - t0 < 30.0)
+    while (vv_pyramid_loading(p) > 0 && vt_now() - t0 < 30.0)
         vv_pyramid_wait(p, 0.1);
-    const double idle = now_s() - t0;
+    const double idle = vt_now() - t0;
     assert_int_equal(vv_pyramid_loading(p), 0);
     assert_true(wait_for(srv, all_abandoned, 10.0)); /* their connections closed */
     vv_pyramid_stats st;

@@ -23,8 +23,6 @@
  */
 #include "testutil.h"
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -205,16 +203,7 @@ serve_once(void *u) {
 static void
 one_shot_start(one_shot *o, pthread_t *th) {
     memset(o, 0, sizeof *o);
-    o->fd = socket(AF_INET, SOCK_STREAM, 0);
-    assert_true(o->fd >= 0);
-    struct sockaddr_in a = {0};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    assert_int_equal(bind(o->fd, (struct sockaddr *)&a, sizeof a), 0);
-    socklen_t len = sizeof a;
-    assert_int_equal(getsockname(o->fd, (struct sockaddr *)&a, &len), 0);
-    o->port = ntohs(a.sin_port);
-    assert_int_equal(listen(o->fd, 4), 0);
+    o->fd = vt_listen_loopback(4, &o->port);
     assert_int_equal(pthread_create(th, NULL, serve_once, o), 0);
 }
 
@@ -313,15 +302,7 @@ test_batch(void **state) {
     (void)state;
     clear_aws();
     echo_srv o = {.n = 6};
-    o.fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {0};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    assert_int_equal(bind(o.fd, (struct sockaddr *)&a, sizeof a), 0);
-    socklen_t len = sizeof a;
-    assert_int_equal(getsockname(o.fd, (struct sockaddr *)&a, &len), 0);
-    o.port = ntohs(a.sin_port);
-    assert_int_equal(listen(o.fd, 16), 0);
+    o.fd = vt_listen_loopback(16, &o.port);
     pthread_t th;
     assert_int_equal(pthread_create(&th, NULL, serve_echo, &o), 0);
     char root[64];
