@@ -66,13 +66,7 @@ def opening_line(s):
 
 def start_open(s, url):
     """Ctrl+Shift+O (File > Open URL…), the URL typed into the dialog's entry, Enter."""
-    s.focus_main()
-    s.key("ctrl+shift+o")
-    s.xdo("search", "--sync", "--name", "open URL")
-    entry = s.find("URL of the store", "text", timeout=20)
-    s.click(entry)
-    s.type(url)
-    s.wait_for(lambda: url in s.text(entry), f"{url!r} not typed in the entry")
+    s.type_url(url)
     s.key("Return")
 
 
