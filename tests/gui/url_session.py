@@ -23,6 +23,8 @@ meets them:
   returns); once it lands, the line is gone, the store is the open object
   (the object list names it "head"; a full frame of it is drawn and is not
   empty).
+- Quitting while an open is pending (a server that does not answer) ends
+  the program at once with status 0.
 
 usage: url_session.py GUI CLI OUTDIR
 """
@@ -81,7 +83,7 @@ def log(s):
 
 def main():
     store = make_store()
-    gate = threading.Event()
+    gate, gate2, srv2 = threading.Event(), threading.Event(), None
     srv, drip = drip_server(os.path.dirname(store), piece=65536, pause=0, delay=DELAY, gate=gate)
     url = f"http://127.0.0.1:{srv.server_address[1]}/{os.path.basename(store)}"
     try:
@@ -165,11 +167,21 @@ def main():
             print(f"opened: {s.title()!r}; its frame's grey standard deviation {sd:.3f}; "
                   f"served {drip.requests} requests")
             check(sd > 0.02, f"the frame of the URL is empty (standard deviation {sd})")
-            s.quit()
+
+            # 4. quitting while an open is pending (a server that does not answer): the
+            # window goes at once and the program ends with status 0
+            srv2, _ = drip_server(os.path.dirname(store), gate=gate2)
+            start_open(s, f"http://127.0.0.1:{srv2.server_address[1]}/head.ome.zarr")
+            s.wait_for(lambda: opening_line(s) is not None, "no \"Opening URL…\" line", 30)
+            s.quit_discard() if "*" in s.title() else s.quit()
+            print("quit while an open was pending: exit 0")
     finally:
         gate.set()
-        srv.shutdown()
-        srv.server_close()
+        gate2.set()
+        for x in (srv, srv2):
+            if x:
+                x.shutdown()
+                x.server_close()
 
 
 run(main)
