@@ -481,28 +481,72 @@ volume_name(const char *path) {
     return base;
 }
 
-/* A volume file, a folder (a DICOM series, a TIFF stack, a store) or a
- * scene through the door (open_options): a volume read whole shows every
- * channel (the first VV_MAX_CHANNELS) at time step 0, out of core channel
- * 0 alone (the drivers out of core draw objects of one channel), the
- * object owning the source; a mesh that the door names so is added as a
- * mesh; a grid is refused. */
-static gboolean
-open_input(VvgDocument *doc, const char *path, GError **error) {
-    vv_world_open_options o;
-    open_options(doc, &o);
-    vv_world *w = NULL;
+struct vvg_open_job {
+    VvgDocument *doc; /* a reference: its filter cache is used by the run */
+    char *path;
+    vv_world_open_options options;
+    vv_world *world; /* the run's result (NULL: failed, or not run) */
     vv_world_open_info info;
+    char *error; /* the run's error message (the worker's trace, copied) */
+};
+
+vvg_open_job *
+vvg_document_open_job_new(VvgDocument *doc, const char *path) {
+    vvg_open_job *job = g_new0(vvg_open_job, 1);
+    job->doc = g_object_ref(doc);
+    job->path = g_strdup(path);
+    open_options(doc, &job->options);
+    return job;
+}
+
+const char *
+vvg_open_job_path(const vvg_open_job *job) {
+    return job->path;
+}
+
+void
+vvg_open_job_run(vvg_open_job *job) {
     vv_error_clear();
-    if (vv_world_open(&w, path, &o, &info) != VV_OK) {
+    if (vv_world_open(&job->world, job->path, &job->options, &job->info) != VV_OK) {
+        const char *m = vv_error_message();
+        job->error = g_strdup(m && *m ? m : NULL);
+        job->world = NULL;
+    }
+}
+
+void
+vvg_open_job_free(vvg_open_job *job) {
+    if (!job)
+        return;
+    vv_world_free(job->world);
+    g_free(job->error);
+    g_free(job->path);
+    g_object_unref(job->doc);
+    g_free(job);
+}
+
+/* A volume file, a folder (a DICOM series, a TIFF stack, a store) or a
+ * scene through the door (open_options, vvg_open_job_run): a volume read
+ * whole shows every channel (the first VV_MAX_CHANNELS) at time step 0, out
+ * of core channel 0 alone (the drivers out of core draw objects of one
+ * channel), the object owning the source; a mesh that the door names so is
+ * added as a mesh; a grid is refused. */
+gboolean
+vvg_document_open_finish(vvg_open_job *job, GError **error) {
+    VvgDocument *doc = job->doc;
+    const char *path = job->path;
+    const vv_world_open_info info = job->info;
+    if (!job->world) {
         if (info.input == VV_INPUT_MESH) { /* the format table's mesh, by its content */
             vv_error_clear();
             return open_mesh(doc, path, error);
         }
-        set_error(error, info.input == VV_INPUT_SCENE ? "cannot read the scene"
-                                                      : "cannot read the volume");
+        const char *fallback =
+            info.input == VV_INPUT_SCENE ? "cannot read the scene" : "cannot read the volume";
+        g_set_error_literal(error, VVG_ERROR, 1, job->error ? job->error : fallback);
         return FALSE;
     }
+    vv_world *w = g_steal_pointer(&job->world);
     if (info.input == VV_INPUT_SCENE)
         return show_scene(doc, path, w);
     if (info.input == VV_INPUT_GRID) {
@@ -526,6 +570,15 @@ open_input(VvgDocument *doc, const char *path, GError **error) {
     g_hash_table_replace(doc->time_steps, canonical(path),
                          GINT_TO_POINTER(!info.out_of_core && info.n_times > 1 ? info.n_times : 1));
     return show_default_world(doc, w, base, path);
+}
+
+static gboolean
+open_input(VvgDocument *doc, const char *path, GError **error) {
+    vvg_open_job *job = vvg_document_open_job_new(doc, path);
+    vvg_open_job_run(job);
+    const gboolean ok = vvg_document_open_finish(job, error);
+    vvg_open_job_free(job);
+    return ok;
 }
 
 gboolean

@@ -64,6 +64,33 @@ gboolean vvg_document_can_redo(VvgDocument *doc);
  * naming the file.
  */
 gboolean vvg_document_open(VvgDocument *doc, const char *path, GError **error);
+
+/**
+ * vvg_document_open of what the door opens (a volume file, a folder, a
+ * store, a URL, a scene; not a mesh named by its suffix) in two halves, so
+ * that the slow half can run on a worker thread while the main loop goes on
+ * (File > Open URL…: the network): vvg_document_open_job_new (UI thread)
+ * takes @p path (copied) and the document's open options and a reference to
+ * the document; vvg_open_job_run (any one thread, once, nothing else
+ * touching the job meanwhile) calls the door (vv_world_open, thread-safe but
+ * for the process cache's limit, which is set to the same value by every
+ * open) and keeps the World it built or the library's one-line error (the
+ * error trace is per thread: the message is copied into the job);
+ * vvg_document_open_finish (UI thread) installs the result exactly as
+ * vvg_document_open does (same World, selection, undo step and saved
+ * state) or fills @p error with the kept message. A job finished or not is
+ * freed with vvg_open_job_free (UI thread; NULL: nothing), which drops a
+ * World never installed: a cancelled open leaves the document as it was.
+ * The door cannot be interrupted: a job runs until vv_world_open returns
+ * (for a URL, at the latest the transport's timeouts, docs/formats.md).
+ */
+typedef struct vvg_open_job vvg_open_job;
+vvg_open_job *vvg_document_open_job_new(VvgDocument *doc, const char *path);
+/** The path or URL the job opens (owned by the job). */
+const char *vvg_open_job_path(const vvg_open_job *job);
+void vvg_open_job_run(vvg_open_job *job);
+gboolean vvg_document_open_finish(vvg_open_job *job, GError **error);
+void vvg_open_job_free(vvg_open_job *job);
 /**
  * Saves the World as a scene file that `volvis render` renders to the same
  * image (vv_scene_save: an object out of core is written with its file's

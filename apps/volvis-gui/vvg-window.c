@@ -47,6 +47,11 @@ struct _VvgWindow {
     GtkWidget *side;      /* the side bar: hidden by the Controls toggle (F9) */
     GtkWidget *remote;    /* "N chunks, X MB pending" over the views while remote reads wait */
     guint remote_tick;
+    /* File > Open URL… runs on a worker thread (open_async): at most one at a
+     * time; the open pending is opening (NULL: none), shown over the views
+     * by opening_bar (a spinner, "Opening URL…" and Cancel) */
+    GCancellable *opening;
+    GtkWidget *opening_bar, *opening_label, *opening_spinner;
     /* a close or quit waiting for Save (As) to finish */
     void (*after_save)(void *user);
     void *after_save_user;
@@ -408,10 +413,11 @@ offer_raw_import(VvgWindow *win, const char *path, const char *message) {
     gtk_widget_show(d);
 }
 
-void
-vvg_window_open(VvgWindow *win, const char *path) {
-    GError *err = NULL;
-    if (!vvg_document_open(win->doc, path, &err)) {
+/* What an open of @p path ended with (@p err: NULL on success; taken):
+ * the error dialog, else the recent list; the title either way. */
+static void
+open_ended(VvgWindow *win, const char *path, GError *err) {
+    if (err) {
         if (strstr(err->message, "use --raw for raw data")) {
             offer_raw_import(win, path, err->message);
         } else {
@@ -429,6 +435,126 @@ vvg_window_open(VvgWindow *win, const char *path) {
     update_title(win);
 }
 
+void
+vvg_window_open(VvgWindow *win, const char *path) {
+    GError *err = NULL;
+    vvg_document_open(win->doc, path, &err);
+    open_ended(win, path, err);
+}
+
+/* ---- opening on a worker thread ------------------------------------------------
+ * A URL (File > Open URL…) is opened off the UI thread: the door fetches
+ * the store's metadata and its coarsest level over the network, seconds on
+ * a slow server, up to the transport's timeouts on one that does not answer.
+ * vvg_open_job_run runs on a GTask thread; the window shows the open pending
+ * over the views with Cancel, and installs the result on the UI thread
+ * (open_async_done: vvg_document_open_finish, then open_ended, as
+ * vvg_window_open does). One at a time: Open URL… is disabled while one is
+ * pending. Cancel (or the window going) forgets the open at once; the
+ * worker runs until the door returns and its result is then dropped, the
+ * document as it was. Local files stay on the UI thread (vvg_window_open):
+ * a scene's voxelizing and the raw-import offer are dialogs of their own,
+ * and the start-up, drop and recent-file opens, and the tests and
+ * autosave restore built on them, expect the file open when the call
+ * returns. */
+
+static void
+opening_shown(VvgWindow *win, const char *url) {
+    GAction *a = g_action_map_lookup_action(G_ACTION_MAP(win), "open-url");
+    g_simple_action_set_enabled(G_SIMPLE_ACTION(a), url == NULL);
+    if (url) {
+        g_autofree char *text = g_strdup_printf("Opening %s…", url);
+        gtk_label_set_text(GTK_LABEL(win->opening_label), text);
+        gtk_spinner_start(GTK_SPINNER(win->opening_spinner));
+    } else {
+        gtk_spinner_stop(GTK_SPINNER(win->opening_spinner));
+    }
+    gtk_widget_set_visible(win->opening_bar, url != NULL);
+}
+
+static void
+open_async_thread(GTask *task, gpointer source, gpointer data, GCancellable *cancel) {
+    (void)source;
+    (void)cancel; /* the door cannot be interrupted: its result is dropped instead */
+    vvg_open_job_run(data);
+    g_task_return_boolean(task, TRUE);
+}
+
+static void
+open_async_done(GObject *source, GAsyncResult *res, gpointer user) {
+    (void)user;
+    VvgWindow *win = VVG_WINDOW(source);
+    GTask *task = G_TASK(res);
+    vvg_open_job *job = g_task_get_task_data(task);
+    GCancellable *cancel = g_task_get_cancellable(task);
+    if (g_cancellable_is_cancelled(cancel) || cancel != win->opening) {
+        g_printerr("volvis-gui: the open of %s was cancelled; its result is dropped\n",
+                   vvg_open_job_path(job));
+        return;
+    }
+    g_clear_object(&win->opening);
+    opening_shown(win, NULL);
+    GError *err = NULL;
+    vvg_document_open_finish(job, &err);
+    open_ended(win, vvg_open_job_path(job), err);
+}
+
+/* Opens @p url on a worker thread; refused (FALSE) while an open is pending. */
+static gboolean
+open_async(VvgWindow *win, const char *url) {
+    if (win->opening)
+        return FALSE;
+    win->opening = g_cancellable_new();
+    GTask *task = g_task_new(win, win->opening, open_async_done, NULL);
+    g_task_set_task_data(task, vvg_document_open_job_new(win->doc, url),
+                         (GDestroyNotify)vvg_open_job_free);
+    opening_shown(win, url);
+    g_task_run_in_thread(task, open_async_thread);
+    g_object_unref(task);
+    return TRUE;
+}
+
+/* Cancel (the button over the views): the open is forgotten now. */
+static void
+opening_cancel(VvgWindow *win) {
+    if (!win->opening)
+        return;
+    g_cancellable_cancel(win->opening);
+    g_clear_object(&win->opening);
+    g_printerr("volvis-gui: opening cancelled\n");
+    opening_shown(win, NULL);
+}
+
+/* The open pending, over the top of the views: a spinner, "Opening URL…"
+ * (a label: its text is its accessible name) and Cancel. */
+static GtkWidget *
+opening_bar(VvgWindow *win) {
+    GtkWidget *bar = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 8);
+    gtk_widget_add_css_class(bar, "osd");
+    gtk_widget_set_halign(bar, GTK_ALIGN_CENTER);
+    gtk_widget_set_valign(bar, GTK_ALIGN_START);
+    gtk_widget_set_margin_top(bar, 8);
+    win->opening_spinner = gtk_spinner_new();
+    gtk_accessible_update_property(GTK_ACCESSIBLE(win->opening_spinner),
+                                   GTK_ACCESSIBLE_PROPERTY_LABEL, "Opening", -1);
+    win->opening_label = gtk_label_new("");
+    gtk_label_set_ellipsize(GTK_LABEL(win->opening_label), PANGO_ELLIPSIZE_MIDDLE);
+    gtk_label_set_max_width_chars(GTK_LABEL(win->opening_label), 60);
+    gtk_accessible_update_property(GTK_ACCESSIBLE(win->opening_label),
+                                   GTK_ACCESSIBLE_PROPERTY_DESCRIPTION,
+                                   "a remote store being opened", -1);
+    GtkWidget *cancel = gtk_button_new_with_label("Cancel");
+    gtk_accessible_update_property(GTK_ACCESSIBLE(cancel), GTK_ACCESSIBLE_PROPERTY_LABEL,
+                                   "Cancel opening", -1);
+    g_signal_connect_swapped(cancel, "clicked", G_CALLBACK(opening_cancel), win);
+    gtk_box_append(GTK_BOX(bar), win->opening_spinner);
+    gtk_box_append(GTK_BOX(bar), win->opening_label);
+    gtk_box_append(GTK_BOX(bar), cancel);
+    gtk_widget_set_visible(bar, FALSE);
+    win->opening_bar = bar;
+    return bar;
+}
+
 static void
 act_open_file(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
@@ -444,8 +570,8 @@ open_url_go(GtkWidget *w, gpointer dialog) {
     VvgWindow *win = g_object_get_data(G_OBJECT(dialog), "win");
     g_autofree char *url = g_strstrip(g_strdup(gtk_editable_get_text(GTK_EDITABLE(entry))));
     gtk_window_destroy(GTK_WINDOW(dialog));
-    if (url[0])
-        vvg_window_open(win, url);
+    if (url[0] && !open_async(win, url))
+        show_error(win, "Cannot open the URL", "another URL is being opened; cancel it first");
 }
 
 static void
@@ -1219,6 +1345,7 @@ views_with_remote_line(VvgWindow *win) {
         "reads of remote stores (HTTP, S3) asked for and not yet answered", -1);
     gtk_widget_set_visible(win->remote, FALSE);
     gtk_overlay_add_overlay(GTK_OVERLAY(overlay), win->remote);
+    gtk_overlay_add_overlay(GTK_OVERLAY(overlay), opening_bar(win));
     win->remote_tick = g_timeout_add(250, remote_tick, win);
     return overlay;
 }
@@ -1235,6 +1362,10 @@ vvg_window_dispose(GObject *o) {
     g_clear_handle_id(&win->autosave_delay, g_source_remove);
     g_clear_handle_id(&win->autosave_tick, g_source_remove);
     g_clear_handle_id(&win->remote_tick, g_source_remove);
+    if (win->opening) { /* an open pending is dropped when it ends */
+        g_cancellable_cancel(win->opening);
+        g_clear_object(&win->opening);
+    }
     autosave_wait(win); /* an autosave being written ends first */
     win->autosave_gen++;
     if (win->autosave_dir) { /* closed as the user chose: no crash to restore */

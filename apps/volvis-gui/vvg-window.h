@@ -21,7 +21,9 @@ G_BEGIN_DECLS
 G_DECLARE_FINAL_TYPE(VvgWindow, vvg_window, VVG, WINDOW, GtkApplicationWindow)
 
 VvgWindow *vvg_window_new(GtkApplication *app);
-/** Opens a file into the window's World; on failure shows an error dialog. */
+/** Opens a file (or a URL) into the window's World on the UI thread, blocking until the
+ *  door returns; on failure shows an error dialog. File > Open URL… opens on a worker
+ *  thread instead (vvg-window.c, open_async). UI thread. */
 void vvg_window_open(VvgWindow *win, const char *path);
 /**
  * Save volume as… without the chooser: writes the selected volume object

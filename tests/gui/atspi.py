@@ -593,6 +593,17 @@ class Session:
         self.key(keys)
         self.chooser_type(title, path)
 
+    def type_url(self, url):
+        """File > Open URL… by its shortcut (Ctrl+Shift+O): the dialog, URL typed into its
+        entry ("URL of the store"); the caller opens it (Enter, or the Open button)."""
+        self.focus_main()
+        self.key("ctrl+shift+o")
+        self.xdo("search", "--sync", "--name", "open URL")
+        entry = self.find("URL of the store", "text", timeout=20)
+        self.click(entry)
+        self.type(url)
+        self.wait_for(lambda: url in self.text(entry), f"{url!r} not typed in the entry")
+
     def focused_text(self):
         """The text entry that holds the keyboard focus, or None."""
         for o in self.find_all(role="text"):

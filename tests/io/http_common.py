@@ -142,10 +142,13 @@ def setup(n=96):
     return volvis, out, Checks(), www, v3, v2
 
 
-def drip_server(root, piece=1024, pause=0.003):
+def drip_server(root, piece=1024, pause=0.003, delay=0.0, gate=None):
     """A slow HTTP server of the files under ROOT on a free loopback port, in threads of
     this process: byte ranges (206 with Content-Range; a suffix range too), HEAD, 404
-    without a body, and every body written PIECE bytes at a time PAUSE seconds apart. It
+    without a body, and every body written PIECE bytes at a time PAUSE seconds apart;
+    each request answered DELAY seconds after it came, and while GATE (a
+    threading.Event, or None) is not set, not at all (a server that does not answer,
+    until the test sets it; handler.held counts the requests waiting there). It
     counts what it answered, as an access log would: (server, handler class) with
     handler.requests (requests answered), handler.sent (body bytes written) and
     handler.wait_idle(). Stop it with server.shutdown(); server.server_close()."""
@@ -160,6 +163,7 @@ def drip_server(root, piece=1024, pause=0.003):
         requests = 0
         sent = 0
         active = 0  # requests being answered now
+        held = 0  # requests that waited for the gate
 
         def log_message(self, *a):
             pass
@@ -171,6 +175,12 @@ def drip_server(root, piece=1024, pause=0.003):
                 Drip.active += active
 
         def _answer(self, body):
+            if gate is not None and not gate.is_set():
+                with Drip.lock:
+                    Drip.held += 1
+                gate.wait()
+            if delay:
+                time.sleep(delay)
             self._add(requests=1, active=1)
             try:
                 self._send(body)

@@ -206,6 +206,10 @@ struct srv_client {
     int close_code; /**< != 0: close with this code and reason at the next write */
     char close_reason[120];
     int overflowed; /**< the queue overflowed */
+    /** The newest state message (`remote`) not yet sent (NULL: none), under the session's
+     *  lock: a newer one replaces it, none is dropped, and it goes out once the queue is
+     *  empty (srv_session_send_latest) */
+    srv_buf *latest;
     srv_client *next;
 };
 
@@ -250,8 +254,9 @@ int srv_session_detach(srv_session *s, srv_client *c);
  */
 int srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m);
 /**
- * The next message for @p c, or NULL: a queued reply first, then the
- * session's newest frame when it is newer than the last sent. The caller
+ * The next message for @p c, or NULL: a queued reply first, then its latest
+ * state message (srv_session_send_latest), then the session's newest frame
+ * when it is newer than the last sent. The caller
  * owns one reference. Service thread.
  */
 srv_buf *srv_session_next_out(srv_session *s, srv_client *c);
@@ -260,11 +265,14 @@ int srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t c
 /** 1 when @p c has something to send. */
 int srv_session_has_out(srv_session *s, srv_client *c);
 /**
- * Queues progress message @p text (copied) for @p c alone, unless half its
- * queue is taken already: a client that reads slowly misses progress, and
- * never its replies for it (service thread).
+ * Makes state message @p text (copied; a `remote` message: counts that the
+ * newest supersedes) the one @p c hears next of its kind: it replaces one
+ * not yet sent, so a client that reads slowly misses intermediate states,
+ * never the last one, and never its replies (the slot takes no place in the
+ * queue and goes out when the queue is empty, before a frame). Service
+ * thread.
  */
-void srv_session_send_progress(srv_session *s, srv_client *c, const char *text);
+void srv_session_send_latest(srv_session *s, srv_client *c, const char *text);
 
 /**
  * The World of file @p path through the door (vv_world_open: a scene, a

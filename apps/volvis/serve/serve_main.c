@@ -355,8 +355,11 @@ link_remove(srv_client *c) {
 
 /* The reads of remote stores not yet answered, as every client last heard
  * them (service thread); a watcher thread wakes the service four times a
- * second while they change, and the service sends each client a `remote`
- * message when they did. */
+ * second while they change, and the service gives each client a `remote`
+ * message when they did: into its latest-state slot (srv_session_send_latest),
+ * which a newer one replaces and nothing drops, so the last counts (pending
+ * 0 once every read is answered) reach every client, however slowly it
+ * reads. */
 static vv_remote_stats remote_sent;
 static atomic_int remote_stop;
 static pthread_t remote_thread;
@@ -396,7 +399,7 @@ remote_send(void) {
              (unsigned long long)st.bytes_received);
     for (client_link *l = links; l; l = l->next)
         if (l->c->session)
-            srv_session_send_progress(l->c->session, l->c, text);
+            srv_session_send_latest(l->c->session, l->c, text);
 }
 
 static int

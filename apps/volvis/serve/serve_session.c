@@ -231,13 +231,15 @@ reply_json(srv_session *s, uint64_t to, json_t *o) {
 }
 
 void
-srv_session_send_progress(srv_session *s, srv_client *c, const char *text) {
+srv_session_send_latest(srv_session *s, srv_client *c, const char *text) {
     srv_buf *b = srv_buf_text(text, strlen(text));
+    if (!b)
+        return;
     pthread_mutex_lock(&s->lock);
-    if (c->n_queue < SRV_QUEUE_MAX / 2)
-        queue_to(c, b);
+    srv_buf *old = c->latest;
+    c->latest = b;
     pthread_mutex_unlock(&s->lock);
-    srv_buf_unref(b);
+    srv_buf_unref(old);
 }
 
 static void reply_error(srv_session *s, uint64_t to, const char *fmt, ...) VV_PRINTF(3, 4);
@@ -1043,6 +1045,8 @@ srv_session_detach(srv_session *s, srv_client *c) {
     for (int i = 0; i < c->n_queue; i++)
         srv_buf_unref(c->queue[i]);
     c->n_queue = 0;
+    srv_buf_unref(c->latest);
+    c->latest = NULL;
     int left = s->n_clients;
     pthread_mutex_unlock(&s->lock);
     return left;
@@ -1056,6 +1060,9 @@ srv_session_next_out(srv_session *s, srv_client *c) {
         b = c->queue[0];
         memmove(c->queue, c->queue + 1, (size_t)(c->n_queue - 1) * sizeof c->queue[0]);
         c->n_queue--;
+    } else if (c->latest) {
+        b = c->latest;
+        c->latest = NULL;
     } else if (s->frame && s->frame_seq > c->sent_frame) {
         b = srv_buf_ref(s->frame);
         c->sent_frame = s->frame_seq;
@@ -1077,7 +1084,8 @@ srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t cap) 
 int
 srv_session_has_out(srv_session *s, srv_client *c) {
     pthread_mutex_lock(&s->lock);
-    int r = c->n_queue > 0 || (s->frame && s->frame_seq > c->sent_frame) || c->close_code;
+    int r =
+        c->n_queue > 0 || c->latest || (s->frame && s->frame_seq > c->sent_frame) || c->close_code;
     pthread_mutex_unlock(&s->lock);
     return r;
 }
