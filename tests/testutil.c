@@ -477,3 +477,19 @@ vt_now(void) {
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
+
+size_t
+vt_read_request_head(int fd, char *buf, size_t cap) {
+    size_t n = 0;
+    buf[0] = '\0';
+    while (n + 1 < cap) {
+        const ssize_t r = read(fd, buf + n, cap - 1 - n);
+        if (r <= 0)
+            break;
+        n += (size_t)r;
+        buf[n] = '\0';
+        if (strstr(buf, "\r\n\r\n"))
+            break;
+    }
+    return n;
+}

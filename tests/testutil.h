@@ -228,6 +228,11 @@ vv_image *vt_render_q(vv_renderer *r, const vv_world *w, int quality, int thread
  * connections; asserts on failure. For the tests' loopback servers. */
 int vt_listen_loopback(int backlog, int *port);
 
+/** Reads an HTTP request's head from @p fd into @p buf (@p cap bytes, NUL
+ * terminated) up to its blank line, the peer's end or a full buffer;
+ * returns the bytes read. */
+size_t vt_read_request_head(int fd, char *buf, size_t cap);
+
 /** Seconds of CLOCK_MONOTONIC (for the tests' waits). */
 double vt_now(void);
 

@@ -441,17 +441,7 @@ hold_conn_main(void *u) {
     const int c = hc->c;
     free(hc);
     char req[8192];
-    size_t n = 0;
-    while (n + 1 < sizeof req) {
-        const ssize_t r = recv(c, req + n, sizeof req - 1 - n, 0);
-        if (r <= 0)
-            break;
-        n += (size_t)r;
-        req[n] = '\0';
-        if (strstr(req, "\r\n\r\n"))
-            break;
-    }
-    req[n] = '\0';
+    vt_read_request_head(c, req, sizeof req);
     char path[2048] = "";
     int gone = 0;
     if (sscanf(req, "GET %2047s", path) == 1 && strstr(path, "/0/c/")) {

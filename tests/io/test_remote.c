@@ -183,16 +183,7 @@ serve_once(void *u) {
     const int c = accept(o->fd, NULL, NULL);
     if (c < 0)
         return NULL;
-    size_t n = 0;
-    while (n + 1 < sizeof o->req) {
-        const ssize_t r = read(c, o->req + n, sizeof o->req - 1 - n);
-        if (r <= 0)
-            break;
-        n += (size_t)r;
-        o->req[n] = '\0';
-        if (strstr(o->req, "\r\n\r\n"))
-            break;
-    }
+    vt_read_request_head(c, o->req, sizeof o->req);
     const char *resp = "HTTP/1.1 200 OK\r\nContent-Length: 2\r\nConnection: close\r\n\r\nok";
     ssize_t w = write(c, resp, strlen(resp));
     (void)w;
@@ -270,17 +261,7 @@ serve_echo(void *u) {
         if (c < 0)
             return NULL;
         char req[4096];
-        size_t n = 0;
-        while (n + 1 < sizeof req) {
-            const ssize_t r = read(c, req + n, sizeof req - 1 - n);
-            if (r <= 0)
-                break;
-            n += (size_t)r;
-            req[n] = '\0';
-            if (strstr(req, "\r\n\r\n"))
-                break;
-        }
-        req[n] = '\0';
+        vt_read_request_head(c, req, sizeof req);
         char path[256] = "";
         sscanf(req, "GET %255s", path);
         const int missing = strstr(path, "absent") != NULL;
