@@ -583,12 +583,12 @@ test_attenuated_mip_refused(void **state) {
     (void)o;
     vv_view view = ortho_z(3.5, 3.5, 64, 10, 8, 8);
     vv_renderer *r = NULL;
-    vt_ok(vv_renderer_new(&r, "raytrace"));
+    vt_ok(vv_renderer_new(&r, "splat"));
     vv_image *img = NULL;
     vt_ok(vv_image_new(&img, 8, 8));
     assert_int_equal(vv_renderer_render(r, w, &view, NULL, img), VV_ERR_UNSUPPORTED);
     const char *msg = vv_error_message();
-    assert_non_null(strstr(msg, "attenuated-mip mode is not drawn by raytrace (drawn by raycast"));
+    assert_non_null(strstr(msg, "attenuated-mip mode is not drawn by splat (drawn by raycast"));
     assert_null(strchr(msg, '\n'));
     vv_renderer_free(r);
     vv_region_op op;

@@ -745,6 +745,17 @@ class T07Tabs(unittest.TestCase):
         second = DRIVER.current_window_handle
         try:
             open_page()
+            # the page's layout may still change after its first frame (the
+            # panel filled in: a resize, a frame at the new size): wait
+            # until no frame has come for a second
+            end = time.monotonic() + WAIT_S
+            n = js('volvis.frames')
+            while time.monotonic() < end:
+                time.sleep(1.0)
+                m = js('volvis.frames')
+                if m == n and js('volvis.lastFrame.sharp'):
+                    break
+                n = m
             idle = js('volvis.lastFrame')
             frames = js('volvis.frames')
             img_before = element_image('view3d')
