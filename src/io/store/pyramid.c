@@ -174,21 +174,21 @@ dc_worker(void *u) {
 /* read_many's stale for a loader's window (py_read_many). */
 typedef struct py_ask {
     vv_pyramid *p;
-    py_chunk **todo;
+    py_chunk **chunks;
 } py_ask;
 
 static int
 py_stale(void *u, int i) {
     const py_ask *a = u;
     pthread_mutex_lock(a->p->lock);
-    const py_chunk *e = a->todo[i];
+    const py_chunk *e = a->chunks[i];
     const int stale = e->ce.pins <= 1 && e->ce.want != a->p->cl.want;
     pthread_mutex_unlock(a->p->lock);
     return stale;
 }
 
 vv_status
-py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file_bytes,
+py_read_many(vv_pyramid *p, py_chunk **chunks, int n, int nthreads, uint64_t *file_bytes,
              int *missing, int *cancelled) {
     const vv_store *st = &p->store;
     if (n < 1)
@@ -203,40 +203,40 @@ py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file
         return vv_error_set(VV_ERR_NOMEM, "out of memory for %d chunks", n);
     }
     int *org = c + 3 * n, *dims = c + 6 * n;
-    const py_level *l = &p->lv[todo[0]->level];
+    const py_level *l = &p->lv[chunks[0]->level];
     for (int i = 0; i < n; i++) {
         for (int k = 0; k < 3; k++) {
-            c[3 * i + k] = todo[i]->org[k] / l->cdims[k];
-            org[3 * i + k] = todo[i]->org[k];
-            dims[3 * i + k] = todo[i]->blk->dims[k];
+            c[3 * i + k] = chunks[i]->org[k] / l->cdims[k];
+            org[3 * i + k] = chunks[i]->org[k];
+            dims[3 * i + k] = chunks[i]->blk->dims[k];
         }
-        dst[i] = todo[i]->blk->data;
+        dst[i] = chunks[i]->blk->data;
     }
-    py_ask ask = {p, todo};
+    py_ask ask = {p, chunks};
     if (cancelled)
         memset(cancelled, 0, sizeof *cancelled * (size_t)n);
     const vv_status s =
-        st->read_many(st->ctx, todo[0]->level, n, c, dst, org, dims, nthreads, missing, file_bytes,
-                      range, cancelled ? py_stale : NULL, &ask, cancelled);
+        st->read_many(st->ctx, chunks[0]->level, n, c, dst, org, dims, nthreads, missing,
+                      file_bytes, range, cancelled ? py_stale : NULL, &ask, cancelled);
     for (int i = 0; s == VV_OK && i < n; i++) /* taken as the store copied them in */
         if (!cancelled || !cancelled[i])
-            vv_volume_set_range(todo[i]->blk, range + 2 * i);
+            vv_volume_set_range(chunks[i]->blk, range + 2 * i);
     free(c);
     free(dst);
     free(range);
     return s;
 }
 
-/* The chunks of @p todo (n >= 2, one level) through the store's read_many,
+/* The chunks of @p chunks (n >= 2, one level) through the store's read_many,
  * decoded on every core. */
 static vv_status
-read_many(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
+read_many(vv_pyramid *p, py_chunk **chunks, int n, uint64_t *file_bytes, int *missing) {
     int nthreads = vv_threads_get();
     /* each decoding thread holds a chunk's scratch: at most a quarter of the budget */
     const uint64_t quarter = vv_memory_budget_get() / 4, per = p->store.scratch;
     if (per && (uint64_t)nthreads * per > quarter)
         nthreads = quarter / per > 1 ? (int)(quarter / per) : 1;
-    return py_read_many(p, todo, n, nthreads < 1 ? 1 : nthreads, file_bytes, missing, NULL);
+    return py_read_many(p, chunks, n, nthreads < 1 ? 1 : nthreads, file_bytes, missing, NULL);
 }
 
 /* Fetches the chunks in @p todo (n >= 1 of them, their blocks allocated)

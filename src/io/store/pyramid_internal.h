@@ -156,14 +156,14 @@ py_chunk_span(const py_level *l, const int lo[3], const int hi[3], int c0[3], in
 
 /* ---- pyramid.c ------------------------------------------------------------------ */
 
-/* The chunks @p todo[0 .. n) (n >= 1, one level, their blocks allocated,
+/* The chunks @p chunks[0 .. n) (n >= 1, one level, their blocks allocated,
  * the pyramid's lock not held) through the store's read_many, in that
  * order, decoded on @p nthreads threads (the caller's among them): file
  * bytes and missing flags per chunk, each block's range updated; the first
  * failing chunk's error. @p cancelled not NULL (a loader's window): a
  * chunk no request wants any more and no frame waits on (only its
  * reader's pin) is dropped unread, cancelled[i] = 1 (its block untouched). */
-vv_status py_read_many(vv_pyramid *p, py_chunk **todo, int n, int nthreads, uint64_t *file_bytes,
+vv_status py_read_many(vv_pyramid *p, py_chunk **chunks, int n, int nthreads, uint64_t *file_bytes,
                        int *missing, int *cancelled);
 /* Chunk entry @p c (position @p cc) read from the store into its block; any
  * thread, the lock not held. */

@@ -131,7 +131,8 @@ memo_url(const zr_array *a, const char *key) {
 }
 
 /* 1 and a copy of the document (*b, *n; free it) or its absence when
- * @p key of @p a's store was fetched lately. */
+ * @p key of @p a's store was fetched lately; @p b NULL: only whether it
+ * was (nothing copied). */
 static int
 memo_get(const zr_array *a, const char *key, unsigned char **b, size_t *n, int *missing) {
     char *u = memo_url(a, key);
@@ -142,13 +143,15 @@ memo_get(const zr_array *a, const char *key, unsigned char **b, size_t *n, int *
         const zr_memo *m = &memo[i];
         if (!m->url || strcmp(m->url, u) || now - m->t > ZR_MEMO_SECONDS)
             continue;
-        *b = m->missing ? NULL : malloc(m->n ? m->n : 1);
-        if (!m->missing && !*b)
-            break;
-        if (*b)
-            memcpy(*b, m->b, m->n);
-        *n = m->missing ? 0 : m->n;
-        *missing = m->missing;
+        if (b) {
+            *b = m->missing ? NULL : malloc(m->n ? m->n : 1);
+            if (!m->missing && !*b)
+                break;
+            if (*b)
+                memcpy(*b, m->b, m->n);
+            *n = m->missing ? 0 : m->n;
+            *missing = m->missing;
+        }
         hit = 1;
     }
     pthread_mutex_unlock(&memo_lock);
@@ -204,13 +207,8 @@ prefetch_levels(const zr_array *a, json_t *dsl, int count) {
         for (int f = 0; p && f < per; f++) {
             char *k = keys + (size_t)n * 1100;
             snprintf(k, 1100, "%s/%s", p, f ? ".zarray" : "zarr.json");
-            unsigned char *b = NULL;
-            size_t bn = 0;
-            int missing = 0;
-            if (memo_get(a, k, &b, &bn, &missing)) {
-                free(b);
-                continue;
-            }
+            if (memo_get(a, k, NULL, NULL, NULL))
+                continue; /* fetched lately */
             g[n++] = (bs_get){.key = k, .off = 0, .len = ZR_ALL, .max = ZR_JSON_MAX};
         }
     }
