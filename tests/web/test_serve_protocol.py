@@ -12,6 +12,11 @@ Checks, each on the real binary:
   - `mpirun -n 2 volvis serve`: the PNG equals the one-process PNG within 2
     grey levels (the parallel module's compositing), and a drag still gives
     frames, after tabs that left while their frames were being drawn;
+  - a session whose World names the gpu renderer (lavapipe here): the state
+    says gpu, the PNG equals `volvis render` of the saved session (which keeps
+    the renderer) byte for byte and is at least 40 dB from raycast's of the same
+    view; under `mpirun -n 2` within 2 grey levels of one process, each rank
+    with a Vulkan driver loaded (it drew its brick on its own device);
   - --shared: two clients see the same frames, and either steers the view;
   - one thumbnail a preset; a listing marks the Zarr store; a refused open
     or save answers an error and keeps the connection;
@@ -98,6 +103,37 @@ async def drag(ws, width=320, height=256):
             return frames
 
 
+def descendants(pid, comm):
+    """The processes below @pid (children, grandchildren...) named @comm."""
+    parent = {}
+    for d in os.listdir("/proc"):
+        try:
+            with open(f"/proc/{d}/stat") as f:
+                st = f.read()
+            parent[int(d)] = int(st[st.rindex(")") + 2:].split()[1])
+        except (ValueError, OSError):
+            continue
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        for c, pp in parent.items():
+            if pp == p:
+                todo.append(c)
+                try:
+                    with open(f"/proc/{c}/comm") as f:
+                        if f.read().strip() == comm:
+                            out.append(c)
+                except OSError:
+                    pass
+    return out
+
+
+def vulkan_driver_loaded(pid):
+    """Whether process @pid has a Vulkan driver (an ICD: libvulkan_*.so) mapped."""
+    with open(f"/proc/{pid}/maps") as f:
+        return any("libvulkan_" in line for line in f)
+
+
 async def drag_and_png(srv, root, name, cli_extra=(), steps_expected=False):
     async with srv.connect() as ws:
         frames = [h for h, _ in await drag(ws)]
@@ -181,6 +217,64 @@ def main():
             ranks = pixels(asyncio.run(run()), os.path.join(root, "mpi_page.png"))
             diff = np.abs(ranks - one)
             assert diff.max() <= 2, f"2 ranks differ from one process by {diff.max()}"
+        finally:
+            srv.stop()
+
+    def gpu():
+        # a session whose World names the gpu renderer (Vulkan: lavapipe here)
+        scene = os.path.join(root, "head_gpu.json")
+        with open(scene, "w") as f:
+            json.dump({"lights": [{"type": "directional", "color": [1, 1, 1],
+                                   "intensity": 1.0}],
+                       "objects": [{"name": "head", "type": "volume", "file": "ct_head.nrrd",
+                                    "origin": [-122.0, -122.0, -80.25], "mode": "composite",
+                                    "transfer_function": {
+                                        "opacity": [[100, 0.0], [1500, 0.8]],
+                                        "color": [[100, [1, 0.9, 0.8]], [1500, [1, 1, 1]]]}}],
+                       "render": {"renderer": "gpu"}}, f)
+        srv = Server([scene])
+        try:
+            async def state_renderer():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 64, "height": 48}))
+                    return (await until(ws, lambda k, h, p: k == "TEXT" and
+                                        h["type"] == "state" and h["dims"],
+                                        "state"))[1]["renderer"]
+            named = asyncio.run(state_renderer())
+            assert named == "gpu", named
+            png, cli, one = asyncio.run(drag_and_png(srv, root, "gpu"))
+            with open(os.path.join(root, "gpu.json")) as f:
+                saved = json.load(f)
+            assert saved["render"]["renderer"] == "gpu", saved.get("render")
+            assert png == cli, "gpu: the page's PNG differs from volvis render of the session"
+            # the same view drawn by raycast: the gpu renderer's image, not another's
+            saved["render"]["renderer"] = "raycast"
+            with open(os.path.join(root, "gpu_as_raycast.json"), "w") as f:
+                json.dump(saved, f)
+            ray = pixels(cli_png(os.path.join(root, "gpu_as_raycast.json"),
+                                 os.path.join(root, "gpu_raycast.png")),
+                         os.path.join(root, "gpu_raycast.png"))
+            mse = float(np.mean((one - ray) ** 2))
+            psnr = 10 * np.log10(255.0 ** 2 / mse) if mse > 0 else float("inf")
+            assert psnr >= 40, f"gpu against raycast {psnr:.1f} dB"
+            assert one.max() > 50, "the gpu frame is empty"
+        finally:
+            srv.stop()
+        if not shutil.which("mpirun"):
+            raise AssertionError("mpirun is missing (openmpi-bin)")
+        srv = Server([scene], mpi=2)
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await drag(ws)
+                    return await png_of(ws)
+            ranks = pixels(asyncio.run(run()), os.path.join(root, "gpu_mpi_page.png"))
+            diff = np.abs(ranks - one)
+            assert diff.max() <= 2, f"gpu: 2 ranks differ from one process by {diff.max()}"
+            # each rank drew on a Vulkan device: the driver is loaded in both (the
+            # ranks drew with raycast, whatever the World named, before)
+            drivers = [vulkan_driver_loaded(pid) for pid in descendants(srv.p.pid, "volvis")]
+            assert len(drivers) == 2 and all(drivers), f"ranks with a Vulkan driver: {drivers}"
         finally:
             srv.stop()
 
@@ -386,6 +480,7 @@ def main():
     check("drag and PNG in memory equal volvis render of the saved session", in_memory)
     check("out of core: progressive still frames, PNG equals volvis render", out_of_core)
     check("mpirun -n 2: the PNG within 2 levels of one process", mpi)
+    check("gpu: PNG equals volvis render, near raycast; mpirun -n 2 within 2 levels", gpu)
     check("--shared: two clients, one view", shared_session)
     check("thumbnails, the listing's store, refusals keep the connection", thumbnails_listing_errors)
     check("channels (OME-TIFF) and time steps (4-D NIfTI)", channels_and_time)

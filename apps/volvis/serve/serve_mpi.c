@@ -13,6 +13,9 @@
  * the announced state before each frame. While the view moves a frame is
  * the same World through a view of 1/2, 1/4 or 1/8 the size (the
  * Navigator's policy picks, as without MPI); when it stops, the full size.
+ * The ranks draw with the World's method (a scene's "render": {"renderer":
+ * ...}, such as gpu: each rank on its own device) where it has the region
+ * contract, else with the default ray caster.
  */
 #define _GNU_SOURCE
 #include <stdio.h>
@@ -26,6 +29,7 @@
 typedef struct mpi_frame {
     int command; /* 1 a frame, 0 stop */
     int quality;
+    char renderer[64]; /* rank 0's World's method (vv_world_renderer) */
     unsigned long long session;
     char path[4096];
     vv_view view;
@@ -57,6 +61,48 @@ struct srv_mpi_job {
 static pthread_cond_t job_done = PTHREAD_COND_INITIALIZER;
 static srv_mpi_job *jobs, **jobs_tail = &jobs;
 static vv_parallel *par;
+/* the method par draws with when vv_parallel_new makes its own (NULL) */
+#define PAR_DEFAULT "raycast"
+static vv_renderer *par_ren;            /* what par draws with (NULL: its own) */
+static char par_name[64] = PAR_DEFAULT; /* its name */
+
+/* par drawing with the method @p name, the World's (its render settings
+ * @p settings applied), made anew when the method changes: every rank
+ * does the same for the same frame, so they draw alike. A method without
+ * the region contract draws as before, by the default ray caster. Errors:
+ * those of making the renderer (par unchanged). */
+static vv_status
+use_renderer(const char *name, const vv_render_settings *settings) {
+    vv_renderer *ren = NULL;
+    vv_status s = VV_OK;
+    if (strcmp(name, PAR_DEFAULT) != 0) {
+        s = vv_renderer_new(&ren, name);
+        if (s == VV_OK && !(vv_renderer_get_info(ren)->caps & VV_RENDERER_REGION)) {
+            vv_renderer_free(ren);
+            ren = NULL;
+            name = PAR_DEFAULT;
+        }
+    }
+    if (s != VV_OK || !strcmp(name, par_name)) {
+        vv_renderer_free(ren);
+        return s;
+    }
+    if (ren)
+        s = vv_renderer_apply_settings(ren, settings);
+    vv_parallel *np = NULL;
+    if (s == VV_OK)
+        s = vv_parallel_new(&np, ren, NULL);
+    if (s != VV_OK) {
+        vv_renderer_free(ren);
+        return s;
+    }
+    vv_parallel_free(par);
+    vv_renderer_free(par_ren);
+    par = np;
+    par_ren = ren;
+    snprintf(par_name, sizeof par_name, "%s", name);
+    return VV_OK;
+}
 
 vv_status
 srv_mpi_render(srv_server *srv, uint64_t session, const char *path, const vv_world *w,
@@ -90,6 +136,8 @@ srv_mpi_render(srv_server *srv, uint64_t session, const char *path, const vv_wor
 /* The frame of @p f on this rank's World @p w (collective). */
 static vv_status
 render_frame(const mpi_frame *f, vv_world *w, vv_status local, vv_image *out) {
+    if (local == VV_OK)
+        local = use_renderer(f->renderer, &w->render);
     vv_status s = vv_parallel_agree(local);
     if (s != VV_OK)
         return s;
@@ -146,6 +194,7 @@ srv_mpi_service(srv_server *srv) {
             f->session = (unsigned long long)j->session;
             snprintf(f->path, sizeof f->path, "%s", j->path);
             f->view = j->view;
+            snprintf(f->renderer, sizeof f->renderer, "%s", vv_world_renderer(j->world));
             const vv_object *o = srv_first_volume(j->world);
             if (o) {
                 f->has_object = 1;
@@ -185,6 +234,8 @@ srv_mpi_stop(void) {
     }
     vv_parallel_free(par);
     par = NULL;
+    vv_renderer_free(par_ren);
+    par_ren = NULL;
 }
 
 vv_status
@@ -253,5 +304,7 @@ srv_mpi_worker(srv_server *srv) {
     free(f);
     vv_parallel_free(par);
     par = NULL;
+    vv_renderer_free(par_ren);
+    par_ren = NULL;
     return CLI_EXIT_OK;
 }
