@@ -134,6 +134,18 @@ def vulkan_driver_loaded(pid):
         return any("libvulkan_" in line for line in f)
 
 
+def ranks_near(srv, one, path):
+    """A drag on MPI server @srv, then its view's PNG (kept at @path): within 2
+    grey levels of the one-process pixels @one (the parallel module's
+    compositing)."""
+    async def run():
+        async with srv.connect() as ws:
+            await drag(ws)
+            return await png_of(ws)
+    diff = np.abs(pixels(asyncio.run(run()), path) - one)
+    assert diff.max() <= 2, f"2 ranks differ from one process by {diff.max()}"
+
+
 async def drag_and_png(srv, root, name, cli_extra=(), steps_expected=False):
     async with srv.connect() as ws:
         frames = [h for h, _ in await drag(ws)]
@@ -198,7 +210,7 @@ def main():
                      os.path.join(root, "x.png"))
         srv = Server([head], mpi=2)
         try:
-            async def run():
+            async def leave():
                 # a tab that leaves while its frames are drawn by all ranks: its
                 # session ends without holding up the server (its render thread
                 # may wait on the service thread for a frame of all ranks)
@@ -211,12 +223,8 @@ def main():
                                                         "dx": 9, "dy": 0, "seq": i,
                                                         "moving": True}))
                         await gone.send(json.dumps({"type": "png"}))
-                async with srv.connect() as ws:
-                    await drag(ws)
-                    return await png_of(ws)
-            ranks = pixels(asyncio.run(run()), os.path.join(root, "mpi_page.png"))
-            diff = np.abs(ranks - one)
-            assert diff.max() <= 2, f"2 ranks differ from one process by {diff.max()}"
+            asyncio.run(leave())
+            ranks_near(srv, one, os.path.join(root, "mpi_page.png"))
         finally:
             srv.stop()
 
@@ -264,13 +272,7 @@ def main():
             raise AssertionError("mpirun is missing (openmpi-bin)")
         srv = Server([scene], mpi=2)
         try:
-            async def run():
-                async with srv.connect() as ws:
-                    await drag(ws)
-                    return await png_of(ws)
-            ranks = pixels(asyncio.run(run()), os.path.join(root, "gpu_mpi_page.png"))
-            diff = np.abs(ranks - one)
-            assert diff.max() <= 2, f"gpu: 2 ranks differ from one process by {diff.max()}"
+            ranks_near(srv, one, os.path.join(root, "gpu_mpi_page.png"))
             # each rank drew on a Vulkan device: the driver is loaded in both (the
             # ranks drew with raycast, whatever the World named, before)
             drivers = [vulkan_driver_loaded(pid) for pid in descendants(srv.p.pid, "volvis")]
