@@ -9,8 +9,11 @@
 
 #include "cli.h"
 
-static const cli_opt_spec render_opts[] = {
-    CLI_RENDER_OPT_SPECS, {"time-range", 0, "A:B[:STEP]"}, {"repeat", 0, "N"}, {"stats", 0, NULL}};
+static const cli_opt_spec render_opts[] = {CLI_RENDER_OPT_SPECS,
+                                           {"time-range", 0, "A:B[:STEP]"},
+                                           {"repeat", 0, "N"},
+                                           {"orbit", 0, "DEG"},
+                                           {"stats", 0, NULL}};
 #define N_RENDER_OPTS ((int)(sizeof render_opts / sizeof render_opts[0]))
 
 void
@@ -39,6 +42,10 @@ cli_render_usage(FILE *out) {
                  "                   renderer, whose caches carry over (the gpu renderer's\n"
                  "                   bricks on the device); writes the last frame, and the\n"
                  "                   `wrote` line gives the last frame's time\n"
+                 "  --orbit DEG      with --repeat: each frame after the first turns the\n"
+                 "                   camera DEG degrees further about the view's up axis\n"
+                 "                   (as --azimuth), an orbit of the same renderer, its\n"
+                 "                   caches warm (-360 .. 360; default 0)\n"
                  "  --stats          print one line a frame to stdout, key=value pairs:\n"
                  "                   frame= ms= (wall clock) device_ms= upload_bytes=\n"
                  "                   (volume data sent to a device) cache_hits= cache_misses=\n"
@@ -169,6 +176,12 @@ cli_render_main(int argc, char **argv) {
     const char *rs = cli_get(&a, "repeat");
     if (rs && (rc = cli_parse_int(&a, "repeat", rs, 1, 100000, &repeat)))
         return rc;
+    double orbit = 0;
+    const char *os = cli_get(&a, "orbit");
+    if (os && (rc = cli_parse_double(&a, "orbit", os, -360, 360, &orbit)))
+        return rc;
+    if (os && !rs)
+        return cli_usage_error(&a, "--orbit: with --repeat");
     const int show_stats = cli_count(&a, "stats") > 0;
     if ((rs || show_stats) && (tr || r.progressive > 0))
         return cli_usage_error(&a, "--repeat and --stats: one frame, not with --time-range or "
@@ -246,6 +259,8 @@ cli_render_main(int argc, char **argv) {
     lod.load_budget = 0; /* a progressive frame's first step: from what is resident */
     /* --repeat: the same frame again, the renderer's caches warm */
     for (int frame = 1; frame <= repeat; frame++) {
+        if (frame > 1 && orbit != 0)
+            vv_anim_view_turn(&w->view, vv_deg_to_rad(orbit), 0, 1);
         stats = (vv_render_stats){0};
         t0 = cli_now();
         vv_error_clear();

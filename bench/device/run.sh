@@ -6,8 +6,9 @@
 #   part volvis: the Vulkan devices; bench_gpu on the CT head (the peers'
 #     view, composite and MIP, --sizes); the CT head drawn in memory and
 #     through the brick cache (a .vvb within --memory-limit), alternated,
-#     --repeat frames each, the median of frames 2.. of each (ms, device ms,
-#     bytes uploaded, cache hits and misses), and their ratio
+#     --repeat frames each while orbiting (`volvis render --orbit`, --orbit
+#     degrees a frame; 0: the same frame), the median of frames 2.. of each
+#     (ms, device ms, bytes uploaded, cache hits and misses), and their ratio
 #   part vtk: vtkGPUVolumeRayCastMapper (VTK from the bundle, offscreen
 #     through EGL on the GPU: the OpenGL renderer's name is printed and must
 #     be the GPU's, not llvmpipe) in the anchors' benchmark, and bench_gpu on
@@ -16,7 +17,7 @@
 #
 # usage: bash bench/device/run.sh [--part volvis|vtk|all] [--sizes WxH,...]
 #                                 [--vtk-size N] [--repeat N] [--runs N]
-#                                 [--memory-limit SIZE] [--python PY]
+#                                 [--memory-limit SIZE] [--orbit DEG] [--python PY]
 # The bundles unpack once into $VV_DEVICE_DIR (default /tmp/vvdevice) and
 # stay there while the machine is warm, so a later call may carry only the
 # other bundle (64 MiB a call; with the cp312 wheel, 2026-11-28: VolVis 31.7
@@ -36,7 +37,7 @@
 # script on a machine without a GPU, with lavapipe: the figures mean nothing).
 set -uo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
-PART=all SIZES=1024x1024,1920x1080 VTKSIZE=1024 REPEAT=20 RUNS=20 MEMLIM=4M PY=python3
+PART=all SIZES=1024x1024,1920x1080 VTKSIZE=1024 REPEAT=20 RUNS=20 MEMLIM=4M PY=python3 ORBIT=6
 while [ $# -gt 0 ]; do
     case $1 in
     --part) PART=$2; shift 2 ;;
@@ -45,6 +46,7 @@ while [ $# -gt 0 ]; do
     --repeat) REPEAT=$2; shift 2 ;;
     --runs) RUNS=$2; shift 2 ;;
     --memory-limit) MEMLIM=$2; shift 2 ;;
+    --orbit) ORBIT=$2; shift 2 ;;
     --python) PY=$2; shift 2 ;;
     *) echo "run.sh: unknown argument $1" >&2; exit 2 ;;
     esac
@@ -90,7 +92,7 @@ if [ "$PART" != vtk ]; then
         "$VV" renderers 2>&1 | sed -n '/gpu/,$p' | head -12
         step "bench_gpu, CT head, sizes $SIZES"
         "$BG" "$CT" --tf-lo 100 --tf-hi 1500 --sizes "$SIZES" --runs "$RUNS" --no-cpu --outdir "$DEV/out" 2>&1
-        step "CT head in memory against through the brick cache (.vvb, --memory-limit $MEMLIM)"
+        step "CT head in memory against through the brick cache (.vvb, --memory-limit $MEMLIM), orbiting $ORBIT degrees a frame"
         rm -f "$DEV/cache.txt"
         [ -f "$DEV/ct.vvb" ] || "$VV" convert "$CT" "$DEV/ct.vvb" >/dev/null
         W=${SIZES##*,}
@@ -98,7 +100,7 @@ if [ "$PART" != vtk ]; then
             for how in memory cache; do
                 if [ $how = memory ]; then src=$CT lim=(); else src=$DEV/ct.vvb lim=(--memory-limit "$MEMLIM"); fi
                 "$VV" render "$src" "${lim[@]}" --renderer gpu --size "$W" --tf 100:1500 --azimuth 30 \
-                    --elevation 20 --repeat "$REPEAT" --stats -o "$DEV/out/ct_$how.png" 2>&1 |
+                    --repeat "$REPEAT" --orbit "$ORBIT" --stats -o "$DEV/out/ct_$how.png" 2>&1 |
                     "$PY" -c '
 import statistics, sys
 how, run = sys.argv[1], sys.argv[2]

@@ -19,7 +19,10 @@
  *    the cache on the second frame (the multiresolution driver draws them
  *    in turn on the renderer, not on clones whose caches last a frame);
  *  - eviction: a cache budget (device_memory_mb) smaller than the volume's
- *    bricks misses on every frame, and the image stays right.
+ *    bricks misses on every frame, and the image stays right;
+ *  - `--repeat 3 --orbit 45`: the camera turns between frames, frames 2 and
+ *    3 hit the bricks seen before and send no more than the first, and the
+ *    last image is `--azimuth 120`'s drawn afresh.
  *
  * Where no Vulkan device exists the tests skip, saying why.
  */
@@ -316,6 +319,47 @@ test_pyramid_nodes_hit(void **state) {
     assert_int_equal(f[1].hits, f[0].misses);
 }
 
+/* `volvis render --repeat 3 --orbit 45` (close up, so that each view leaves
+ * bricks off screen): the camera turns between frames on one renderer, the
+ * bricks seen before stay on the device (hits on frames 2 and 3, none
+ * uploaded twice: each frame sends no more than the first), and the last
+ * frame is the one `--azimuth 120` draws afresh (30 + 45 + 45 degrees). */
+static void
+test_cli_orbit(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    const char *dir = vt_outdir("render_gpu_cache");
+    char orbit[512], fresh[512];
+    snprintf(orbit, sizeof orbit, "%s/orbit.png", dir);
+    snprintf(fresh, sizeof fresh, "%s/orbit_fresh.png", dir);
+    vt_run_result r = run_cli("render", vvb, "--renderer", "gpu", "--memory-limit", "4M", "--tf",
+                              "100:1500", "--azimuth", "30", "--zoom", "3", "--size", "48x48",
+                              "--repeat", "3", "--orbit", "45", "--stats", "-o", orbit);
+    if (r.status != 0) {
+        char why[600];
+        snprintf(why, sizeof why, "%s", r.err);
+        vt_run_result_free(&r);
+        fail_msg("render --orbit: %s", why);
+    }
+    printf("%s", r.out);
+    frame_stats f[3];
+    const int n = parse_stats(r.out, f, 3);
+    vt_run_result_free(&r);
+    assert_int_equal(n, 3);
+    assert_true(f[0].misses > 0 && f[0].hits == 0 && f[0].upload_bytes > 0);
+    for (int i = 1; i < 3; i++) {
+        assert_true(f[i].hits > 0);
+        assert_true(f[i].upload_bytes <= f[0].upload_bytes);
+    }
+    r = run_cli("render", vvb, "--renderer", "gpu", "--memory-limit", "4M", "--tf", "100:1500",
+                "--azimuth", "120", "--zoom", "3", "--size", "48x48", "-q", "-o", fresh);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    const double db = vt_png_psnr(orbit, fresh);
+    printf("# --orbit 45 twice from 30 against --azimuth 120: %.1f dB\n", db);
+    assert_true(db >= 60);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -323,6 +367,7 @@ main(void) {
         cmocka_unit_test(test_orbit_uploads_new_bricks),
         cmocka_unit_test(test_eviction),
         cmocka_unit_test(test_pyramid_nodes_hit),
+        cmocka_unit_test(test_cli_orbit),
     };
     return vt_run_tests(tests, setup, NULL);
 }
