@@ -64,7 +64,7 @@ static vv_parallel *par;
 /* the method par draws with when vv_parallel_new makes its own (NULL) */
 #define PAR_DEFAULT "raycast"
 static vv_renderer *par_ren;            /* what par draws with (NULL: its own) */
-static char par_name[64] = PAR_DEFAULT; /* its name */
+static char par_name[64] = PAR_DEFAULT; /* the method the frames last named */
 
 /* par drawing with the method @p name, the World's (its render settings
  * @p settings applied), made anew when the method changes: every rank
@@ -73,6 +73,8 @@ static char par_name[64] = PAR_DEFAULT; /* its name */
  * those of making the renderer (par unchanged). */
 static vv_status
 use_renderer(const char *name, const vv_render_settings *settings) {
+    if (!strcmp(name, par_name))
+        return VV_OK; /* the frame before's: par as it is, nothing made */
     vv_renderer *ren = NULL;
     vv_status s = VV_OK;
     if (strcmp(name, PAR_DEFAULT) != 0) {
@@ -80,14 +82,9 @@ use_renderer(const char *name, const vv_render_settings *settings) {
         if (s == VV_OK && !(vv_renderer_get_info(ren)->caps & VV_RENDERER_REGION)) {
             vv_renderer_free(ren);
             ren = NULL;
-            name = PAR_DEFAULT;
         }
     }
-    if (s != VV_OK || !strcmp(name, par_name)) {
-        vv_renderer_free(ren);
-        return s;
-    }
-    if (ren)
+    if (s == VV_OK && ren)
         s = vv_renderer_apply_settings(ren, settings);
     vv_parallel *np = NULL;
     if (s == VV_OK)
