@@ -190,11 +190,6 @@ parse_channel_options(cli_args *a, cli_render_args *r) {
                        : r->n_colors   ? "--colors"
                        : r->n_contrast ? "--contrast"
                                        : "--blend";
-    if ((r->n_channels || r->all_channels) && cli_get(a, "memory-limit"))
-        return cli_usage_error(a,
-                               "%s: volumes larger than memory are drawn one "
-                               "channel at a time (--channel C with --memory-limit)",
-                               chan);
     if ((r->n_channels || r->all_channels) &&
         (cli_get(a, "mode") || cli_get(a, "iso") || cli_get(a, "tf")))
         return cli_usage_error(a,
@@ -383,7 +378,10 @@ world_options(const cli_render_args *r, vv_world_open_options *o, cli_progress *
     o->renderer = r->renderer;
     o->n_channels = r->n_channels;
     memcpy(o->channels, r->channels, sizeof o->channels);
-    o->all_channels = r->all_channels;
+    /* a file of several channels shows them all in their colours unless one
+     * channel, a mode, an isovalue, a transfer function or labels is asked */
+    o->all_channels = r->all_channels ||
+                      (r->channel < 0 && !r->has_mode && !r->has_iso && !r->has_tf && !r->labels);
     o->n_colors = r->n_colors;
     memcpy(o->colors, r->colors, sizeof o->colors);
     o->n_contrast = r->n_contrast;
@@ -445,6 +443,8 @@ cli_render_world(const cli_render_args *r, vv_world **out, vv_world_open_info *i
         cli_error("%s: %s", r->input, refused);
         return CLI_EXIT_FAIL;
     }
+    if (info->warning[0])
+        fprintf(stderr, "volvis: warning: %s: %s\n", r->input, info->warning);
     if (info->switched && !r->quiet)
         fprintf(stderr,
                 "volvis: note: %s: rendering it in memory would take %llu MiB, more than the "

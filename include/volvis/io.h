@@ -179,6 +179,17 @@ typedef struct vv_load_info {
     /** 1: the image is a label image (OME-Zarr image-label metadata: segment
      *  ids); a World made of it shows it as a label volume (VV_SEG_LABELS) */
     int is_label;
+    /** 1: window holds the read channel's display window from the metadata (OME-Zarr
+     *  omero window start and end: its contrast limits, data values), checked finite,
+     *  start < end and within what the voxel type holds */
+    int has_window;
+    double window[2];
+    /** Metadata that was ignored, one line for the user ("" none): an omero window that is
+     *  NaN, inverted or absurd */
+    char warning[256];
+    /** 1: the metadata marks the read channel inactive (OME-Zarr omero "active": false):
+     *  shown hidden until the user turns it on */
+    int inactive;
 } vv_load_info;
 
 /** Options for vv_volume_load. */
@@ -301,6 +312,15 @@ typedef struct vv_open_options {
     int header_only;
     /** where the pieces read out of core are held; NULL: the process's (vv_cache_process) */
     vv_cache *cache;
+    /**
+     * > 1: out of core, a pyramid of these channels of the file at once
+     * (channels[0 .. n_channels), in that order; load.channel unused): each
+     * chunk holds them all (vv_source_channels); a file that has no pyramid
+     * (a bricked file holds one channel) is VV_ERR_UNSUPPORTED. 0 or 1:
+     * load.channel alone.
+     */
+    int n_channels;
+    int channels[VV_MAX_CHANNELS];
 } vv_open_options;
 
 /** The defaults: vv_load_options_init, VV_OPEN_DEFAULT, bricks, the whole pass, the
@@ -323,6 +343,8 @@ typedef struct vv_opened {
     vv_grid *grid;     /**< a grid, owned */
     vv_mesh *mesh;     /**< a mesh, owned */
     vv_load_info info; /**< a volume's channels, steps, levels, name and colour */
+    /** n_channels > 1 asked: channel k's name, colour and window (ch_info[0] is info) */
+    vv_load_info ch_info[VV_MAX_CHANNELS];
 } vv_opened;
 
 /**

@@ -619,7 +619,9 @@ typedef struct vv_object {
      * one reference held); `volume` is then its proxy (a coarse volume over
      * the same world box: the defaults, previews and global effects are
      * drawn from it) and vv_renderer_render reads the voxels from here.
-     * NULL: `volume` holds them all (in memory). An object of one channel.
+     * NULL: `volume` holds them all (in memory). An object of several
+     * channels holds a source of as many (vv_object_set_channels_source),
+     * each channel's volume its proxy.
      */
     vv_source *source;
 } vv_object;
@@ -682,6 +684,33 @@ vv_status vv_object_set_volume(vv_object *obj, vv_volume *volume);
  */
 vv_status vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes,
                                  const char *const *names);
+
+/**
+ * vv_object_set_channels over a source of several channels, out of core:
+ * @p obj (a volume object) becomes an object of the @p source's channels
+ * (vv_source_channels, 2..VV_MAX_CHANNELS; channel c of the object is the
+ * source's channel c), each channel's volume its proxy over level
+ * @p level (vv_source_channel_proxy: the coarsest level, for defaults,
+ * previews and global effects) and its transfer function's opacity unit
+ * the level's smallest voxel spacing; the renderers read the voxels from
+ * the source (vv_renderer_render's level-of-detail driver, every channel
+ * of a node at once). Names, colours and contrast as vv_object_set_channels
+ * (contrast from the proxies). A reference to @p source is taken. Errors:
+ * VV_ERR_INVALID (not a volume object, a source of one channel, no such
+ * level), those of reading the proxies, VV_ERR_NOMEM; on error @p obj is
+ * unchanged. Not thread-safe on the same object.
+ */
+vv_status vv_object_set_channels_source(vv_object *obj, vv_source *source, int level,
+                                        const char *const *names);
+
+/**
+ * Drops the source of volume object @p obj (one channel or several): its
+ * volumes (the proxies out of core) become what it shows, in memory.
+ * Nothing when it has none. What a renderer without the region contract
+ * falls back to (vv_render_options.proxy_fallback). Not thread-safe on the
+ * same object.
+ */
+void vv_object_drop_source(vv_object *obj);
 
 /**
  * Marks channel @p c of multi-channel object @p obj as a label volume

@@ -208,6 +208,9 @@ typedef struct vv_world_open_info {
     /** 1 on failure when the options do not fit the input (a usage error: channels for a
      *  scene, more colours than the file has channels, levels of a file without them) */
     int options_misfit;
+    /** Metadata of the file that was ignored, one line for the user ("" none): an omero
+     *  window that is NaN, inverted or absurd (vv_load_info.warning) */
+    char warning[512];
 } vv_world_open_info;
 
 /**

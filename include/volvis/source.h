@@ -183,6 +183,24 @@ vv_status vv_source_read_box(vv_source *s, int level, const int lo[3], const int
                              vv_volume **out);
 
 /**
+ * The channels each piece of @p s carries (>= 1): a pyramid opened for
+ * several channels of its file (vv_open_options.n_channels) holds them
+ * all in each chunk, so that a node of a frame is read once for every
+ * channel its object draws. vv_source_level, vv_source_read_box and
+ * vv_source_proxy speak of channel 0 (its value range); the channel_
+ * functions of any channel. 1 for NULL.
+ */
+int vv_source_channels(const vv_source *s);
+/** vv_source_level with channel @p channel's value range; NULL out of range. Borrowed. */
+const vv_volume *vv_source_channel_level(const vv_source *s, int channel, int level);
+/** vv_source_read_box of channel @p channel (0 .. vv_source_channels - 1). Thread-safe.
+ *  Errors: as vv_source_read_box, VV_ERR_INVALID (no such channel). */
+vv_status vv_source_channel_read_box(vv_source *s, int channel, int level, const int lo[3],
+                                     const int hi[3], vv_volume **out);
+/** vv_source_proxy of channel @p channel. Errors: as vv_source_proxy, VV_ERR_INVALID. */
+vv_status vv_source_channel_proxy(vv_source *s, int channel, int level, vv_volume **out);
+
+/**
  * vv_source_read_box of level 0 as a vv_box_reader (volume.h) with the
  * source as @p source: what the box-by-box consumers read full resolution
  * through (vv_measure_histogram_boxes, vv_measure_isosurface_boxes, the

@@ -28,8 +28,8 @@ vv_source_new(vv_source **out, const vv_source_ops *ops, void *user, const char 
         return vv_error_set(VV_ERR_INVALID, "source: NULL output");
     *out = NULL;
     const char *bad =
-        !ops                                    ? "no table"
-        : ops->version != VV_SOURCE_OPS_VERSION ? "a table of another version"
+        !ops                                                         ? "no table"
+        : ops->version != 1 && ops->version != VV_SOURCE_OPS_VERSION ? "a table of another version"
         : !ops->levels || !ops->level || !ops->read_box || !ops->proxy || !ops->stats || !ops->close
             ? "a required method missing"
         : ops->kind == VV_SOURCE_BRICKS && !ops->bricks    ? "bricks without a brick view"
@@ -129,6 +129,77 @@ vv_source_read_box(vv_source *s, int level, const int lo[3], const int hi[3], vv
                                 "source: %s: box %d..%d outside level %d's %d voxels along axis %d",
                                 vv_path_basename(s->path), lo[k], hi[k], level, h->dims[k], k);
     return s->ops->read_box(s->user, level, lo, hi, out);
+}
+
+/* The channel methods of @p s's table (a version 1 table has none). */
+static int
+has_channels(const vv_source *s) {
+    return s->ops->version >= 2 && s->ops->channels && s->ops->channel_level &&
+           s->ops->channel_read_box && s->ops->channel_proxy;
+}
+
+int
+vv_source_channels(const vv_source *s) {
+    if (!s || !has_channels(s))
+        return 1;
+    const int n = s->ops->channels(s->user);
+    return n > 1 ? n : 1;
+}
+
+const vv_volume *
+vv_source_channel_level(const vv_source *s, int channel, int level) {
+    if (!s || channel < 0 || channel >= vv_source_channels(s))
+        return NULL;
+    if (channel == 0 && !has_channels(s))
+        return vv_source_level(s, level);
+    return level >= 0 && level < s->ops->levels(s->user)
+               ? s->ops->channel_level(s->user, channel, level)
+               : NULL;
+}
+
+/* VV_ERR_INVALID unless @p channel is one of @p s's. */
+static vv_status
+check_channel(const vv_source *s, int channel) {
+    const int n = vv_source_channels(s);
+    if (channel < 0 || channel >= n)
+        return vv_error_set(VV_ERR_INVALID, "source: %s: no channel %d (it carries %d)",
+                            vv_path_basename(s->path), channel, n);
+    return VV_OK;
+}
+
+vv_status
+vv_source_channel_read_box(vv_source *s, int channel, int level, const int lo[3], const int hi[3],
+                           vv_volume **out) {
+    if (!s || !lo || !hi || !out)
+        return vv_error_set(VV_ERR_INVALID, "source: NULL argument");
+    *out = NULL;
+    vv_status st = check_channel(s, channel);
+    if (st != VV_OK || !has_channels(s))
+        return st != VV_OK ? st : vv_source_read_box(s, level, lo, hi, out);
+    const vv_volume *h = vv_source_level(s, level);
+    if (!h)
+        return vv_error_set(VV_ERR_INVALID, "source: %s: no level %d (it has %d)",
+                            vv_path_basename(s->path), level, s->ops->levels(s->user));
+    for (int k = 0; k < 3; k++)
+        if (lo[k] < 0 || hi[k] < lo[k] || hi[k] >= h->dims[k])
+            return vv_error_set(VV_ERR_INVALID,
+                                "source: %s: box %d..%d outside level %d's %d voxels along axis %d",
+                                vv_path_basename(s->path), lo[k], hi[k], level, h->dims[k], k);
+    return s->ops->channel_read_box(s->user, channel, level, lo, hi, out);
+}
+
+vv_status
+vv_source_channel_proxy(vv_source *s, int channel, int level, vv_volume **out) {
+    if (!s || !out)
+        return vv_error_set(VV_ERR_INVALID, "source: NULL argument");
+    *out = NULL;
+    vv_status st = check_channel(s, channel);
+    if (st != VV_OK || !has_channels(s))
+        return st != VV_OK ? st : vv_source_proxy(s, level, out);
+    if (!vv_source_level(s, level))
+        return vv_error_set(VV_ERR_INVALID, "source: %s: no level %d for a proxy (it has %d)",
+                            vv_path_basename(s->path), level, s->ops->levels(s->user));
+    return s->ops->channel_proxy(s->user, channel, level, out);
 }
 
 vv_status

@@ -112,7 +112,7 @@ vv_status
 vv_format_register(const vv_format_record *row, vv_format *id) {
     if (!row || !row->name || !row->title)
         return vv_error_set(VV_ERR_INVALID, "format register: a row needs a name and a title");
-    if (row->version != VV_FORMAT_RECORD_VERSION)
+    if (row->version != 2 && row->version != VV_FORMAT_RECORD_VERSION)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "format register: %s: record version %d (this library reads %d)",
                             row->name, row->version, VV_FORMAT_RECORD_VERSION);

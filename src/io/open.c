@@ -59,15 +59,49 @@ row_of(const char *path, vv_format f, int *deep_volume) {
     return vv_format_record_of(g);
 }
 
-/* The store of row @p r over @p path as a pyramid in @p cache. */
+/* The store of row @p r over @p path for channels @p channels[0 .. n)
+ * (n > 1; else channel @p channel alone) at step @p time into @p st: the
+ * row's store of several channels, else one store a channel stacked.
+ * @p info: n entries (channel k's name and colour), may be NULL. */
 static vv_status
-open_pyramid(vv_pyramid **out, const vv_format_record *r, const char *path, int channel, int time,
-             vv_cache *cache, vv_load_info *info) {
+open_store_of(const vv_format_record *r, vv_store *st, const char *path, int channel, int n,
+              const int *channels, int time, vv_load_info *info) {
+    if (n <= 1)
+        return io_open_store(r, st, path, n == 1 ? channels[0] : channel, time, info);
+    if (n > VV_STORE_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_LIMIT, "%d channels at once (at most %d)", n,
+                            VV_STORE_MAX_CHANNELS);
+    memset(st, 0, sizeof *st);
+    if (r->version >= 3 && r->open_store_channels)
+        return r->open_store_channels(st, path, n, channels, time, info);
+    vv_store parts[VV_STORE_MAX_CHANNELS];
+    memset(parts, 0, sizeof parts);
+    vv_status s = VV_OK;
+    for (int k = 0; k < n && s == VV_OK; k++) {
+        vv_load_info one;
+        memset(&one, 0, sizeof one);
+        s = io_open_store(r, &parts[k], path, channels[k], time, info ? &info[k] : &one);
+        if (s != VV_OK)
+            s = vv_error_prefix(s, "channel %d", channels[k]);
+    }
+    if (s != VV_OK) {
+        for (int k = 0; k < n; k++)
+            vv_store_close(&parts[k]);
+        return s;
+    }
+    return vv_store_stack(st, parts, n);
+}
+
+/* The store of row @p r over @p path as a pyramid in @p cache (channels
+ * as open_store_of takes them). */
+static vv_status
+open_pyramid(vv_pyramid **out, const vv_format_record *r, const char *path, int channel, int n,
+             const int *channels, int time, vv_cache *cache, vv_load_info *info) {
     *out = NULL;
     if (strlen(path) >= 4096)
         return vv_error_set(VV_ERR_LIMIT, "%s: path too long", r->name);
     vv_store st;
-    vv_status s = io_open_store(r, &st, path, channel, time, info);
+    vv_status s = open_store_of(r, &st, path, channel, n, channels, time, info);
     if (s != VV_OK) {
         vv_store_close(&st);
         return vv_pyramid_prefix(s, r->name, path);
@@ -87,7 +121,25 @@ vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time, vv_ca
                             "%s: not a multiresolution file (OME-Zarr, BigDataViewer or Imaris "
                             "HDF5, a .vvb)",
                             vv_path_basename(path));
-    return open_pyramid(out, r, path, channel, time, cache, info);
+    return open_pyramid(out, r, path, channel, 0, NULL, time, cache, info);
+}
+
+vv_status
+vv_pyramid_open_channels(vv_pyramid **out, const char *path, int n, const int *channels, int time,
+                         vv_cache *cache, vv_load_info *info) {
+    if (!out || !path || !channels)
+        return vv_error_set(VV_ERR_INVALID, "pyramid: NULL argument");
+    *out = NULL;
+    if (n < 1 || n > VV_STORE_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_INVALID, "pyramid: %d channels (1 .. %d)", n,
+                            VV_STORE_MAX_CHANNELS);
+    const vv_format_record *r = vv_format_record_of(vv_format_detect_kind(path, VV_DATA_VOLUME, 0));
+    if (!r || !r->open_store)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: not a multiresolution file (OME-Zarr, BigDataViewer or Imaris "
+                            "HDF5, a .vvb)",
+                            vv_path_basename(path));
+    return open_pyramid(out, r, path, channels[0], n, channels, time, cache, info);
 }
 
 /* Bytes of a volume of @p h's dims and type. */
@@ -109,11 +161,16 @@ open_out_of_core(vv_opened *out, const vv_format_record *r, const char *path,
     const vv_load_options *lo = &opt->load;
     const uint64_t quarter = vv_cache_limit(cache) / 4;
     const int bricks = r->open_bricks || r->raw_layout;
-    if (r->open_store && (opt->levels || !bricks)) {
+    const int nch = opt->n_channels > 1 ? opt->n_channels : 0;
+    if (nch > VV_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_LIMIT, "%s: %d channels at once (at most %d)",
+                            vv_path_basename(path), nch, VV_MAX_CHANNELS);
+    if (r->open_store && (opt->levels || !bricks || nch)) {
         vv_pyramid *p = NULL;
-        vv_load_info info;
-        memset(&info, 0, sizeof info);
-        vv_status s = open_pyramid(&p, r, path, lo->channel, lo->time, cache, &info);
+        vv_load_info *info = out->ch_info;
+        memset(out->ch_info, 0, sizeof out->ch_info);
+        vv_status s =
+            open_pyramid(&p, r, path, lo->channel, nch, opt->channels, lo->time, cache, info);
         if (s != VV_OK)
             return s;
         const int level = lo->level > 0 ? lo->level : 0;
@@ -123,23 +180,27 @@ open_out_of_core(vv_opened *out, const vv_format_record *r, const char *path,
             vv_pyramid_free(p);
             return s;
         }
-        if (auto_small && bytes_of(vv_pyramid_level(p, 0)) <= quarter) {
+        if (auto_small && bytes_of(vv_pyramid_level(p, 0)) * (uint64_t)(nch ? nch : 1) <= quarter) {
             vv_pyramid_free(p);
             return VV_ERR_UNSUPPORTED;
         }
-        if (bricks && vv_pyramid_levels(p) == 1) { /* no levels (a .vvb without): by bricks */
+        if (bricks && vv_pyramid_levels(p) == 1 &&
+            !nch) { /* no levels (a .vvb without): by bricks */
             vv_pyramid_free(p);
             goto by_bricks;
         }
         if ((s = vv_pyramid_source_new(&out->source, p, r->name)) != VV_OK)
             return s;
-        info.n_levels = vv_pyramid_levels(p);
-        out->info = info;
+        for (int k = 0; k < (nch ? nch : 1); k++)
+            info[k].n_levels = vv_pyramid_levels(p);
+        out->info = info[0];
         return VV_OK;
     }
     if (!bricks)
         return VV_ERR_UNSUPPORTED;
 by_bricks:
+    if (nch) /* a bricked file holds one channel */
+        return VV_ERR_UNSUPPORTED;
     if (lo->channel > 0 || lo->time > 0) /* bricks hold channel 0 at step 0: read whole */
         return VV_ERR_UNSUPPORTED;
     vv_status s;
@@ -230,6 +291,14 @@ vv_open(vv_opened *out, const char *path, const vv_open_options *opt) {
     if (s == VV_ERR_UNSUPPORTED && only) {
         /* a store row's own reason is kept (an unknown compressor) */
         if (!r || !r->open_store || r->open_bricks || r->raw_layout)
+            vv_error_clear();
+        vv_opened_clear(out);
+        return VV_ERR_UNSUPPORTED;
+    }
+    if (s == VV_ERR_UNSUPPORTED && opt->n_channels > 1) {
+        /* several channels are opened together out of core only: the
+         * caller reads them whole one by one (the row's reason is kept) */
+        if (!r || !r->open_store)
             vv_error_clear();
         vv_opened_clear(out);
         return VV_ERR_UNSUPPORTED;

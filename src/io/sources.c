@@ -149,6 +149,27 @@ py_close(void *user) {
     vv_pyramid_free(user);
 }
 
+static int
+py_channels(void *user) {
+    return vv_pyramid_channels(user);
+}
+
+static const vv_volume *
+py_channel_level(void *user, int channel, int level) {
+    return vv_pyramid_channel_level(user, channel, level);
+}
+
+static vv_status
+py_channel_read_box(void *user, int channel, int level, const int lo[3], const int hi[3],
+                    vv_volume **out) {
+    return vv_pyramid_channel_read_box(user, channel, level, lo, hi, out);
+}
+
+static vv_status
+py_channel_proxy(void *user, int channel, int level, vv_volume **out) {
+    return vv_pyramid_channel_proxy(user, channel, level, out);
+}
+
 static const vv_source_ops pyramid_ops = {
     .version = VV_SOURCE_OPS_VERSION,
     .kind = VV_SOURCE_PYRAMID,
@@ -163,6 +184,10 @@ static const vv_source_ops pyramid_ops = {
     .wait = py_wait,
     .cancel = py_cancel,
     .close = py_close,
+    .channels = py_channels,
+    .channel_level = py_channel_level,
+    .channel_read_box = py_channel_read_box,
+    .channel_proxy = py_channel_proxy,
 };
 
 vv_status

@@ -64,6 +64,19 @@ io_info_from_wire(vv_load_info *info, const unsigned char *bytes, size_t n) {
     for (char *c = info->channel_name; *c; c++) /* printable, for messages and lists */
         if ((unsigned char)*c < 0x20 || *c == 0x7f)
             *c = '?';
+    /* the display window when it is two finite numbers in order; the
+     * warning a line of printable text */
+    info->has_window = w.has_window == 1 && isfinite(w.window[0]) && isfinite(w.window[1]) &&
+                       w.window[0] < w.window[1];
+    if (info->has_window)
+        memcpy(info->window, w.window, sizeof info->window);
+    info->inactive = w.inactive == 1;
+    if (memchr(w.warning, 0, sizeof w.warning)) {
+        memcpy(info->warning, w.warning, sizeof info->warning);
+        for (char *c = info->warning; *c; c++)
+            if ((unsigned char)*c < 0x20 || *c == 0x7f)
+                *c = '?';
+    }
     return 1;
 }
 
@@ -210,6 +223,10 @@ io_open_store(const vv_format_record *r, vv_store *st, const char *path, int cha
         info->is_label = got.is_label;
         memcpy(info->color, got.color, sizeof info->color);
         memcpy(info->channel_name, got.channel_name, sizeof info->channel_name);
+        info->has_window = got.has_window;
+        memcpy(info->window, got.window, sizeof info->window);
+        info->inactive = got.inactive;
+        memcpy(info->warning, got.warning, sizeof info->warning);
     }
     return VV_OK;
 }

@@ -139,6 +139,66 @@ vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes, const c
 }
 
 vv_status
+vv_object_set_channels_source(vv_object *obj, vv_source *source, int level,
+                              const char *const *names) {
+    if (!obj || obj->type != VV_OBJECT_VOLUME || !source)
+        return vv_error_set(VV_ERR_INVALID, "channels: not a volume object, or no source");
+    const int n = vv_source_channels(source);
+    if (n < 2 || n > VV_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_INVALID,
+                            "channels: %s carries %d channel%s (an object of channels needs 2 .. "
+                            "%d)",
+                            vv_path_basename(vv_source_path(source)), n, n == 1 ? "" : "s",
+                            VV_MAX_CHANNELS);
+    const vv_volume *h = vv_source_level(source, level);
+    if (!h)
+        return vv_error_set(VV_ERR_INVALID, "channels: %s has no level %d",
+                            vv_path_basename(vv_source_path(source)), level);
+    vv_volume *proxy[VV_MAX_CHANNELS] = {NULL};
+    vv_status s = VV_OK;
+    for (int c = 0; c < n && s == VV_OK; c++)
+        s = vv_source_channel_proxy(source, c, level, &proxy[c]);
+    vv_object o = *obj; /* the channels made on a copy: obj unchanged on error */
+    o.n_channels = 0;
+    o.channels = NULL;
+    o.source = NULL;
+    o.volume = NULL;
+    if (s == VV_OK)
+        s = vv_object_set_channels(&o, n, proxy, names);
+    for (int c = 0; c < n; c++)
+        vv_volume_free(proxy[c]);
+    if (s != VV_OK) {
+        for (int c = 0; c < o.n_channels; c++)
+            vv_volume_free(o.channels[c].volume);
+        free(o.channels);
+        vv_volume_free(o.volume);
+        return s;
+    }
+    /* opacity per the level's smallest voxel edge, not the proxy's */
+    const double unit = vv_tf_default_unit_distance(h);
+    for (int c = 0; c < n; c++)
+        o.channels[c].tf.opacity_unit_distance = unit;
+    for (int c = 0; c < obj->n_channels; c++)
+        vv_volume_free(obj->channels[c].volume);
+    free(obj->channels);
+    vv_volume_free(obj->volume);
+    vv_source_free(obj->source);
+    obj->volume = o.volume;
+    obj->channels = o.channels;
+    obj->n_channels = o.n_channels;
+    obj->source = vv_source_ref(source);
+    return VV_OK;
+}
+
+void
+vv_object_drop_source(vv_object *obj) {
+    if (!obj || !obj->source)
+        return;
+    vv_source_free(obj->source);
+    obj->source = NULL;
+}
+
+vv_status
 vv_object_set_channel_labels(vv_object *obj, int c, int labels) {
     if (!obj || obj->type != VV_OBJECT_VOLUME || obj->n_channels < 2)
         return vv_error_set(VV_ERR_INVALID, "label channel: %s is not an object of channels",

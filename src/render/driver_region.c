@@ -26,6 +26,7 @@
 #include "core/internal.h"
 #include "render/drivers.h"
 #include "render/frame.h"
+#include "render/shade.h"
 #include "render/tf_tables.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
@@ -120,6 +121,178 @@ check_args(const drv_renderer *r, const vv_world *w, int object, const vv_view *
                                 "bricks: object '%s': out-of-core rendering draws one object",
                                 w->objects[i]->name);
     return VV_OK;
+}
+
+/* ---- an object's channels by regions -------------------------------------------- */
+
+/* How the drivers draw a multi-channel object (vv_object.channels) by
+ * regions. Under the composite rule the channels mix sample by sample,
+ * so one region render draws them all (vv_render_region.channel_voxels),
+ * combined over as a one-channel composite object's are. Under the
+ * additive and maximum rules each channel is composited (or projected)
+ * along the whole ray before the channels are added, so each drawn
+ * channel is a pass of its own: a region render of the channel as an
+ * object of one channel (vv_vchannel_object, as the renderers draw it in
+ * memory) into an image of its own, combined over the nodes by over (or
+ * max), and the passes added at the end (dc_merge), as raycast.c's
+ * trace_channels adds them. A node's channels are read once for all its
+ * passes. */
+typedef struct drv_chans {
+    int multi;                  /* the object has channels (n_channels > 1) */
+    int split;                  /* additive or maximum: a pass a channel */
+    int npass;                  /* region renders a node: 1, or the drawn channels (split) */
+    int n_drawn;                /* the drawn channels (visible, with a volume) */
+    int drawn[VV_MAX_CHANNELS]; /* their indices in the object; pass p draws drawn[p] (split) */
+    vv_object *chobj;           /* split: the passes' objects of one channel */
+    vv_object **slots;          /* split: npass x n_objects, the World's objects with the pass's */
+    vv_world *worlds;           /* split: the passes' Worlds */
+} drv_chans;
+
+static void
+dc_free(drv_chans *c) {
+    free(c->chobj);
+    free(c->slots);
+    free(c->worlds);
+    memset(c, 0, sizeof *c);
+}
+
+/* @p c for object @p object of @p w. Errors: VV_ERR_INVALID (no channel
+ * drawn), VV_ERR_NOMEM. */
+static vv_status
+dc_init(drv_chans *c, const vv_world *w, int object) {
+    memset(c, 0, sizeof *c);
+    const vv_object *obj = w->objects[object];
+    c->npass = 1;
+    if (obj->n_channels < 2)
+        return VV_OK;
+    c->multi = 1;
+    for (int k = 0; k < obj->n_channels; k++)
+        if (obj->channels[k].visible && obj->channels[k].volume)
+            c->drawn[c->n_drawn++] = k;
+    if (c->n_drawn == 0)
+        return vv_error_set(VV_ERR_INVALID, "bricks: object '%s': no channel is shown", obj->name);
+    if (obj->blend == VV_BLEND_COMPOSITE)
+        return VV_OK;
+    c->split = 1;
+    c->npass = c->n_drawn;
+    const size_t no = (size_t)w->n_objects;
+    c->chobj = calloc((size_t)c->npass, sizeof *c->chobj);
+    c->slots = calloc((size_t)c->npass * no, sizeof *c->slots);
+    c->worlds = calloc((size_t)c->npass, sizeof *c->worlds);
+    if (!c->chobj || !c->slots || !c->worlds) {
+        dc_free(c);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    for (int p = 0; p < c->npass; p++) {
+        vv_vchannel_object(obj, &obj->channels[c->drawn[p]], &c->chobj[p]);
+        vv_object **sl = c->slots + (size_t)p * no;
+        for (size_t i = 0; i < no; i++)
+            sl[i] = i == (size_t)object ? &c->chobj[p] : w->objects[i];
+        c->worlds[p] = *w;
+        c->worlds[p].objects = sl;
+    }
+    return VV_OK;
+}
+
+/* The World pass @p p draws (the object's own, one pass). */
+static const vv_world *
+dc_world(const drv_chans *c, const vv_world *w, int p) {
+    return c->split ? &c->worlds[p] : w;
+}
+
+/* How pass @p p's regions combine, and the mode its image finishes by. */
+static vv_render_mode
+dc_mode(const drv_chans *c, const vv_object *obj, int p) {
+    return c->split ? c->chobj[p].mode : c->multi ? VV_MODE_COMPOSITE : obj->mode;
+}
+
+/* Region @p rg's voxels for pass @p p of a node whose channels are
+ * @p vols (object channel order; one-channel object: vols[0]). */
+static void
+dc_voxels(const drv_chans *c, vv_render_region *rg, vv_volume *const *vols, int p) {
+    if (!c->multi) {
+        rg->voxels = vols[0];
+        rg->channel_voxels = NULL;
+    } else if (c->split) {
+        rg->voxels = vols[c->drawn[p]];
+        rg->channel_voxels = NULL;
+    } else {
+        rg->voxels = vols[c->drawn[0]];
+        rg->channel_voxels = (const vv_volume *const *)vols;
+    }
+}
+
+/* The split passes' images (@p wholes[0 .. c->npass)): each its own image
+ * and keys, cleared, combined by its pass's mode. Free with dc_wholes_free,
+ * also on error. */
+static vv_status
+dc_wholes(const drv_chans *c, const vv_object *obj, const vv_view *view, vv_region_image *wholes) {
+    const size_t np = (size_t)view->width * (size_t)view->height;
+    for (int p = 0; p < c->npass; p++) {
+        wholes[p] = (vv_region_image){.op = vv_region_op_for(dc_mode(c, obj, p))};
+        wholes[p].key = malloc(sizeof(float) * (np ? np : 1));
+        if (!wholes[p].key)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        vv_status s = vv_image_new(&wholes[p].image, view->width, view->height);
+        if (s != VV_OK)
+            return s;
+        vv_region_image_clear(&wholes[p]);
+    }
+    return VV_OK;
+}
+
+static void
+dc_wholes_free(vv_region_image *wholes, int n) {
+    for (int p = 0; wholes && p < n; p++) {
+        vv_image_free(wholes[p].image);
+        free(wholes[p].key);
+    }
+}
+
+/* 1 when a node whose channels' ranges @p range (as @p get gives them,
+ * channel k's into vmin, vmax; 0: unknown) is transparent under every
+ * drawn channel's transfer function; @p bin: each channel's table entry
+ * width. Label channels are never transparent. */
+static int
+dc_transparent(const drv_chans *c, const vv_object *obj,
+               int (*get)(void *u, int ch, float *vmin, float *vmax), void *u, const double *bin) {
+    for (int d = 0; d < c->n_drawn; d++) {
+        const int k = c->drawn[d];
+        const vv_channel *ch = &obj->channels[k];
+        float vmin, vmax;
+        if (ch->labels || !get(u, k, &vmin, &vmax) ||
+            tf_max_opacity(&ch->tf, vmin - bin[k], vmax) > 0)
+            return 0;
+    }
+    return 1;
+}
+
+/* The passes' finished images (each over black) added into @p out over
+ * @p background: colour the sum, opacity 1 - prod(1 - opacity), depth
+ * the nearest (raycast.c trace_channels and trace_channels_maximum). */
+static void
+dc_merge(vv_region_image *wholes, int n, vv_vec3 background, vv_image *out) {
+    const vv_vec3 black = {0, 0, 0};
+    for (int p = 0; p < n; p++)
+        vv_region_image_finish(&wholes[p], black);
+    const size_t np = (size_t)out->width * (size_t)out->height;
+    const float bg[3] = {(float)background.x, (float)background.y, (float)background.z};
+    for (size_t i = 0; i < np; i++) {
+        float C[3] = {0, 0, 0}, T = 1, depth = INFINITY;
+        for (int p = 0; p < n; p++) {
+            const float *px = wholes[p].image->rgba + 4 * i;
+            for (int k = 0; k < 3; k++)
+                C[k] += px[k];
+            T *= 1 - (px[3] < 1 ? px[3] : 1);
+            const float d = wholes[p].image->depth[i];
+            depth = d < depth ? d : depth;
+        }
+        float *o = out->rgba + 4 * i;
+        for (int k = 0; k < 3; k++)
+            o[k] = C[k] + T * bg[k];
+        o[3] = 1 - T;
+        out->depth[i] = depth;
+    }
 }
 
 /* An iso object's brick or node whose voxels (ghosts included) all lie
@@ -292,12 +465,6 @@ drv_render_region(const vv_renderer_ops *ops, void *state, const vv_world *world
     if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
         return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
                             region->object);
-    if (world->objects[region->object]->n_channels > 1)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "%s: object '%s' has %d channels; region renders (out of core, "
-                            "distributed) draw one channel an object",
-                            name, world->objects[region->object]->name,
-                            world->objects[region->object]->n_channels);
     const vv_object *obj = world->objects[region->object];
     if (obj->type != VV_OBJECT_VOLUME || !obj->volume)
         return vv_error_set(VV_ERR_INVALID, "%s: object '%s' is not a volume object", name,
@@ -500,11 +667,25 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
     if (s != VV_OK)
         return s;
     const vv_object *obj = w->objects[object];
-    const vv_render_mode mode = obj->mode;
     const vv_volume *hdr = src->header(src->user);
     int nb[3];
     src->grid(src->user, nb);
     const int n = nb[0] * nb[1] * nb[2];
+    drv_chans dc;
+    if ((s = dc_init(&dc, w, object)) != VV_OK)
+        return s;
+    const vv_render_mode mode = dc_mode(&dc, obj, 0);
+    /* a bricked file holds one channel: an object of several is one brick
+     * here, in memory (its channels' own volumes) */
+    if (dc.multi &&
+        (n != 1 || hdr->dims[0] != obj->volume->dims[0] || hdr->dims[1] != obj->volume->dims[1] ||
+         hdr->dims[2] != obj->volume->dims[2])) {
+        dc_free(&dc);
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "bricks: object '%s' has %d channels; they are drawn in memory or from "
+                            "a pyramid's nodes, not from a bricked file",
+                            obj->name, obj->n_channels);
+    }
 
     /* the whole volume's index space: the object placed with the source's
      * geometry (its own volume may be a coarse proxy) */
@@ -513,13 +694,17 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
     const vv_mat4 i2w = vv_object_index_to_world(&geo);
     int ok = 0;
     const vv_mat4 w2i = vv_mat4_inverse(i2w, &ok);
-    if (!ok)
+    if (!ok) {
+        dc_free(&dc);
         return vv_error_set(VV_ERR_INVALID, "bricks: object '%s': singular transform", obj->name);
+    }
     ooc_order ord;
     memset(&ord, 0, sizeof ord);
     ord.list = malloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
-    if (!ord.list)
+    if (!ord.list) {
+        dc_free(&dc);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
     ord.nb = nb;
     ord.src = src;
     ord.ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
@@ -536,6 +721,10 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
 
     vv_region_image whole, piece;
     s = frame_images(view, out, mode, &whole, &piece);
+    vv_region_image wholes[VV_MAX_CHANNELS];
+    memset(wholes, 0, sizeof wholes);
+    if (s == VV_OK && dc.split)
+        s = dc_wholes(&dc, obj, view, wholes);
     /* the whole volume by boxes, where the World's volume is a coarse proxy */
     brick_reader reader;
     memset(&reader, 0, sizeof reader);
@@ -549,7 +738,8 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
         s = brick_reader_init(&reader, src, hdr, nb);
         wv.tile = reader.cut[0][1] - reader.cut[0][0];
     }
-    const int skip = mode == VV_MODE_COMPOSITE && obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
+    const int skip =
+        !dc.multi && mode == VV_MODE_COMPOSITE && obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
     /* pass 0: a ray a pixel; pass 1 (quality 2 of a renderer that
      * supersamples): the points it asks for, the bricks read again */
     vv_region_rays rays;
@@ -588,13 +778,26 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
                 rg.lo[a] = in.lo[a] > 0 ? in.lo[a] : -INFINITY;
                 rg.hi[a] = in.hi[a] < last ? in.hi[a] : INFINITY;
             }
-            vv_volume *bv = NULL;
-            if ((s = src->load(src->user, idx, &bv)) != VV_OK)
+            vv_volume *vols[VV_MAX_CHANNELS] = {NULL};
+            if (dc.multi) /* in memory: the channels' own volumes */
+                for (int d = 0; d < dc.n_drawn; d++)
+                    vols[dc.drawn[d]] = vv_volume_ref(obj->channels[dc.drawn[d]].volume);
+            else if ((s = src->load(src->user, idx, &vols[0])) != VV_OK)
                 break;
-            rg.voxels = bv;
-            s = pass ? render_piece(r, w, view, &rg, opt, &rpiece, &rwhole)
-                     : render_piece(r, w, view, &rg, opt, &piece, &whole);
-            vv_volume_free(bv); /* the renderer's cache may keep its own reference */
+            for (int p = 0; p < dc.npass && s == VV_OK; p++) {
+                dc_voxels(&dc, &rg, vols, p);
+                const vv_world *pw = dc_world(&dc, w, p);
+                s = pass       ? render_piece(r, pw, view, &rg, opt, &rpiece, &rwhole)
+                    : dc.split ? render_piece(r, pw, view, &rg, opt, &piece, &wholes[p])
+                               : render_piece(r, pw, view, &rg, opt, &piece, &whole);
+            }
+            for (int k = 0; k < VV_MAX_CHANNELS; k++)
+                vv_volume_free(vols[k]); /* the renderer's cache may keep its own reference */
+        }
+        if (s == VV_OK && pass == 0 && dc.split) {
+            /* the channels added (the second pass of quality 2 is for one image) */
+            dc_merge(wholes, dc.npass, w->background, out);
+            break;
         }
         if (s == VV_OK && pass == 0) {
             vv_region_image_finish(&whole, w->background);
@@ -610,6 +813,8 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
     vv_image_free(piece.image);
     free(whole.key);
     free(ord.list);
+    dc_wholes_free(wholes, dc.npass);
+    dc_free(&dc);
     return s;
 }
 
@@ -654,7 +859,70 @@ typedef struct mr_frame {
     /* progressive frames: the boxes its pending nodes want loaded (level,
      * lo[3], hi[3] each), front to back (vv_multires_source.request) */
     int *want, n_want, cap_want;
+    /* a multi-channel object: its passes (drv_chans), the split passes'
+     * images, each channel's table entry width */
+    drv_chans dc;
+    vv_region_image *wholes;
+    double cbin[VV_MAX_CHANNELS];
+    /* level 0 of each channel by boxes (global effects of a frame at level 0) */
+    vv_region_volume cwhole[VV_MAX_CHANNELS];
+    struct mr_channel_reader {
+        const vv_multires_source *src;
+        int channel;
+    } creader[VV_MAX_CHANNELS];
+    int have_cwhole; /* 1: the nodes take cwhole (every node at level 0) */
 } mr_frame;
+
+/* Level 0 of one channel by boxes (vv_region_volume of mr_frame.cwhole). */
+static vv_status
+channel0_box(void *user, const int lo[3], const int hi[3], vv_volume **out) {
+    const struct mr_channel_reader *c = user;
+    return c->src->channel_read_box(c->src->user, c->channel, 0, lo, hi, out);
+}
+
+static int
+channel0_range(void *user, const int lo[3], const int hi[3], float *vmin, float *vmax) {
+    const struct mr_channel_reader *c = user;
+    return c->src->channel_range(c->src->user, c->channel, 0, lo, hi, vmin, vmax);
+}
+
+/* dc_voxels, and the node's whole volume for the pass: the channel's
+ * (split passes draw it as an object of one channel), or every channel's. */
+static void
+mr_voxels(const mr_frame *f, vv_render_region *rg, vv_volume *const *vols, int p) {
+    dc_voxels(&f->dc, rg, vols, p);
+    if (!f->have_cwhole)
+        return;
+    if (f->dc.split) {
+        rg->whole = &f->cwhole[f->dc.drawn[p]];
+        rg->channel_whole = NULL;
+    } else {
+        rg->whole = NULL;
+        rg->channel_whole = f->cwhole;
+    }
+}
+
+/* A node's voxels at its level: every channel's (vols in object channel
+ * order) of a multi-channel object, else vols[0]. */
+static vv_status
+read_node(const mr_frame *f, const mr_node *nd, vv_volume **vols) {
+    if (f->dc.multi)
+        return f->src->read_channels(f->src->user, nd->level, nd->lo, nd->hi, vols);
+    return f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &vols[0]);
+}
+
+/* dc_transparent's ranges: channel k's over a node's box (mr_range_at). */
+typedef struct mr_range_at {
+    const mr_frame *f;
+    int level;
+    const int *lo, *hi;
+} mr_range_at;
+
+static int
+mr_channel_range(void *u, int ch, float *vmin, float *vmax) {
+    const mr_range_at *a = u;
+    return a->f->src->channel_range(a->f->src->user, ch, a->level, a->lo, a->hi, vmin, vmax);
+}
 
 /* The coarsest level whose voxel projects to at most lod->voxel_pixels at
  * the node's point nearest the eye (the fixed level when one is asked). */
@@ -719,10 +987,16 @@ plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
     if (!node_region(f, L, n0, n1, &rg, slo, shi))
         return VV_OK; /* beyond this level's voxels */
     float vmin, vmax;
-    if ((f->skip || f->obj->mode == VV_MODE_ISO) && f->src->box_range &&
-        f->src->box_range(f->src->user, L, slo, shi, &vmin, &vmax) &&
-        (f->skip ? !(tf_max_opacity(&f->obj->tf, vmin - f->bin, vmax) > 0)
-                 : iso_below(f->obj, f->src->level(f->src->user, L), vmax))) {
+    if (f->dc.multi) {
+        const mr_range_at at = {f, L, slo, shi};
+        if (f->skip && dc_transparent(&f->dc, f->obj, mr_channel_range, (void *)&at, f->cbin)) {
+            f->lod->skipped++;
+            return VV_OK;
+        }
+    } else if ((f->skip || f->obj->mode == VV_MODE_ISO) && f->src->box_range &&
+               f->src->box_range(f->src->user, L, slo, shi, &vmin, &vmax) &&
+               (f->skip ? !(tf_max_opacity(&f->obj->tf, vmin - f->bin, vmax) > 0)
+                        : iso_below(f->obj, f->src->level(f->src->user, L), vmax))) {
         f->lod->skipped++;
         return VV_OK;
     }
@@ -872,6 +1146,9 @@ node_threads(const mr_frame *f) {
     if (t < 2 || f->n_nodes < 2 || omp_get_max_active_levels() > 1 || omp_in_parallel() ||
         (f->r->ops->info.caps & (VV_RENDERER_GLOBAL | VV_RENDERER_DEVICE)) || !f->r->clone)
         return 1;
+    /* a piece of the view's size a thread and pass: at most 8 of them */
+    while (t > 1 && t * f->dc.npass > MR_MAX_THREADS)
+        t--;
     return t;
 }
 
@@ -892,7 +1169,9 @@ render_nodes_concurrent(mr_frame *f, int T) {
     const int progressive = f->lod->progressive && f->src->missing_chunks;
     const int W = f->view->width, H = f->view->height;
     const size_t np = (size_t)W * (size_t)H;
-    vv_region_image pieces[MR_MAX_THREADS];
+    /* a piece a thread and pass: the passes of a node are combined together, in order */
+    const int npass = f->dc.npass;
+    vv_region_image pieces[MR_MAX_THREADS][VV_MAX_CHANNELS];
     const drv_renderer *rs[MR_MAX_THREADS];
     memset(pieces, 0, sizeof pieces);
     rs[0] = f->r;
@@ -900,16 +1179,18 @@ render_nodes_concurrent(mr_frame *f, int T) {
     for (int t = 1; t < T && s == VV_OK; t++)
         if ((s = f->r->clone(f->r, &f->clones[t])) == VV_OK)
             rs[t] = &f->clones[t];
-    pieces[0] = *f->piece; /* the frame's own (clear); the others made here */
-    for (int t = 1; t < T && s == VV_OK; t++) {
-        pieces[t].op = VV_REGION_OVER;
-        pieces[t].clear_outside = 1;
-        pieces[t].key = malloc(sizeof(float) * (np ? np : 1));
-        s = pieces[t].key ? vv_image_new(&pieces[t].image, W, H)
-                          : vv_error_set(VV_ERR_NOMEM, "out of memory");
-        if (s == VV_OK)
-            vv_region_image_clear(&pieces[t]);
-    }
+    pieces[0][0] = *f->piece; /* the frame's own (clear); the others made here */
+    for (int t = 0; t < T && s == VV_OK; t++)
+        for (int p = t == 0 ? 1 : 0; p < npass && s == VV_OK; p++) {
+            vv_region_image *pc = &pieces[t][p];
+            pc->op = VV_REGION_OVER;
+            pc->clear_outside = 1;
+            pc->key = malloc(sizeof(float) * (np ? np : 1));
+            s = pc->key ? vv_image_new(&pc->image, W, H)
+                        : vv_error_set(VV_ERR_NOMEM, "out of memory");
+            if (s == VV_OK)
+                vv_region_image_clear(pc);
+        }
     /* the nodes' renders report no progress of their own (several at once) */
     vv_render_options o;
     vv_render_options_init(&o);
@@ -926,7 +1207,7 @@ render_nodes_concurrent(mr_frame *f, int T) {
         for (int i = 0; i < n; i++) {
             const int t = omp_get_thread_num();
             mr_node *nd = &f->nodes[i];
-            vv_volume *bv = NULL;
+            vv_volume *vols[VV_MAX_CHANNELS] = {NULL};
             vv_status ns = VV_OK;
             int draw = 0;
             /* the reads one at a time, in the plan's order: a thread
@@ -951,17 +1232,19 @@ render_nodes_concurrent(mr_frame *f, int T) {
             if (!__atomic_load_n(&failed, __ATOMIC_ACQUIRE)) {
                 draw = !progressive || progressive_level(f, nd, &budget);
                 if (draw)
-                    ns = f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &bv);
+                    ns = read_node(f, nd, vols);
             }
             pthread_mutex_lock(&turn_lock);
             __atomic_store_n(&next_read, i + 1, __ATOMIC_RELEASE);
             pthread_cond_broadcast(&turn);
             pthread_mutex_unlock(&turn_lock);
-            vv_region_image *pc = &pieces[t];
-            if (draw && ns == VV_OK) {
-                nd->rg.voxels = bv;
-                ns = render_into(rs[t], f->w, f->view, &nd->rg, &o, pc, f->whole->op);
+            for (int p = 0; draw && ns == VV_OK && p < npass; p++) {
+                mr_voxels(f, &nd->rg, vols, p);
+                const vv_region_image *wh = f->dc.split ? &f->wholes[p] : f->whole;
+                ns = render_into(rs[t], dc_world(&f->dc, f->w, p), f->view, &nd->rg, &o,
+                                 &pieces[t][p], wh->op);
                 nd->rg.voxels = NULL;
+                nd->rg.channel_voxels = NULL;
             }
             int rc[4];
             piece_rect(&nd->rg, W, H, rc);
@@ -973,7 +1256,9 @@ render_nodes_concurrent(mr_frame *f, int T) {
                     __atomic_store_n(&failed, 1, __ATOMIC_RELEASE);
                 }
                 if (draw && ns == VV_OK && !failed) {
-                    vv_region_image_combine_rect(f->whole, pc, rc[0], rc[1], rc[2], rc[3]);
+                    for (int p = 0; p < npass; p++)
+                        vv_region_image_combine_rect(f->dc.split ? &f->wholes[p] : f->whole,
+                                                     &pieces[t][p], rc[0], rc[1], rc[2], rc[3]);
                     f->lod->nodes[nd->level]++;
                 }
                 /* progress by nodes combined; cancelling stops the frame */
@@ -984,17 +1269,19 @@ render_nodes_concurrent(mr_frame *f, int T) {
                     __atomic_store_n(&failed, 1, __ATOMIC_RELEASE);
                 }
             }
-            if (draw)
-                vv_region_image_clear_rect(pc, rc[0], rc[1], rc[2], rc[3]);
-            vv_volume_free(bv);
+            for (int p = 0; draw && p < npass; p++)
+                vv_region_image_clear_rect(&pieces[t][p], rc[0], rc[1], rc[2], rc[3]);
+            for (int k = 0; k < VV_MAX_CHANNELS; k++)
+                vv_volume_free(vols[k]);
         }
         if (failed)
             s = vv_error_set(first, "%s", msg);
     }
-    for (int t = 1; t < T; t++) {
-        vv_image_free(pieces[t].image);
-        free(pieces[t].key);
-    }
+    for (int t = 0; t < T; t++)
+        for (int p = t == 0 ? 1 : 0; p < npass; p++) {
+            vv_image_free(pieces[t][p].image);
+            free(pieces[t][p].key);
+        }
     return s;
 }
 
@@ -1031,16 +1318,21 @@ render_nodes(mr_frame *f) {
             continue;
         if (f->rays && !rays_in_rect(f->rays, f->view->width, &nd->rg))
             continue; /* no ray of the second pass */
-        vv_volume *bv = NULL;
-        vv_status s = f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &bv);
+        vv_volume *vols[VV_MAX_CHANNELS] = {NULL};
+        vv_status s = read_node(f, nd, vols);
         if (s != VV_OK)
             return s;
-        nd->rg.voxels = bv;
         nd->rg.rays = f->rays;
-        s = render_piece(f->r, f->w, f->view, &nd->rg, f->opt, f->piece, f->whole);
+        for (int p = 0; p < f->dc.npass && s == VV_OK; p++) {
+            mr_voxels(f, &nd->rg, vols, p);
+            s = render_piece(f->r, dc_world(&f->dc, f->w, p), f->view, &nd->rg, f->opt, f->piece,
+                             f->dc.split ? &f->wholes[p] : f->whole);
+        }
         nd->rg.voxels = NULL;
+        nd->rg.channel_voxels = NULL;
         nd->rg.rays = NULL;
-        vv_volume_free(bv);
+        for (int k = 0; k < VV_MAX_CHANNELS; k++)
+            vv_volume_free(vols[k]);
         if (s != VV_OK)
             return s;
         if (!f->rays) /* the second pass reads them again: not more nodes */
@@ -1193,13 +1485,39 @@ drv_render_multires(const drv_renderer *r, const vv_world *w, int object,
     f.leaf = src->node_cells > 0 ? src->node_cells : VV_BRICK_CELLS;
     if ((s = setup_levels(&f)) != VV_OK)
         return s;
-    f.skip = f.obj->mode == VV_MODE_COMPOSITE && f.obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
-    f.ghost = f.obj->mode == VV_MODE_ISO ? 2 : 1;
+    if ((s = dc_init(&f.dc, w, object)) != VV_OK)
+        return s;
+    if (f.dc.multi) {
+        const int nch = src->version >= 3 ? src->n_channels : 1;
+        if (nch != f.obj->n_channels || !src->read_channels || !src->channel_range ||
+            !src->channel_level) {
+            dc_free(&f.dc);
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "multires: object '%s' has %d channels, its source carries %d",
+                                f.obj->name, f.obj->n_channels, nch);
+        }
+        for (int k = 0; k < nch; k++) {
+            const vv_volume *hk = src->channel_level(src->user, k, 0);
+            f.cbin[k] = hk ? (hk->range[1] - hk->range[0]) / (VV_VC_LUT - 1) : 0;
+        }
+        /* each drawn channel composited (composite, additive) skips what its
+         * transfer function hides; maximum projects everything */
+        f.skip = f.obj->blend != VV_BLEND_MAXIMUM;
+    } else {
+        f.skip =
+            f.obj->mode == VV_MODE_COMPOSITE && f.obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
+    }
+    f.ghost = !f.dc.multi && f.obj->mode == VV_MODE_ISO ? 2 : 1;
 
     vv_region_image whole, piece;
-    s = frame_images(view, out, f.obj->mode, &whole, &piece);
+    vv_region_image wholes[VV_MAX_CHANNELS];
+    memset(wholes, 0, sizeof wholes);
+    s = frame_images(view, out, dc_mode(&f.dc, f.obj, 0), &whole, &piece);
+    if (s == VV_OK && f.dc.split)
+        s = dc_wholes(&f.dc, f.obj, view, wholes);
     f.whole = &whole;
     f.piece = &piece;
+    f.wholes = wholes;
     if (s == VV_OK) {
         /* the root: the smallest node that covers every axis */
         int depth = 0, big = f.cells[0] > f.cells[1] ? f.cells[0] : f.cells[1];
@@ -1224,8 +1542,20 @@ drv_render_multires(const drv_renderer *r, const vv_world *w, int object,
                    f.obj->volume->dims[2] != h0->dims[2]);
         for (int i = 0; i < f.n_nodes && at0; i++)
             at0 = f.nodes[i].level == 0;
-        for (int i = 0; i < f.n_nodes && at0; i++)
+        for (int i = 0; i < f.n_nodes && at0 && !f.dc.multi; i++)
             f.nodes[i].rg.whole = &wv;
+        if (at0 && f.dc.multi && src->channel_read_box) {
+            /* each channel's level 0 by boxes, unplanned (mr_voxels) */
+            for (int k = 0; k < f.obj->n_channels; k++) {
+                f.creader[k] = (struct mr_channel_reader){src, k};
+                f.cwhole[k] = (vv_region_volume){.user = &f.creader[k],
+                                                 .header = src->channel_level(src->user, k, 0),
+                                                 .read_box = channel0_box,
+                                                 .box_range = channel0_range,
+                                                 .tile = f.leaf};
+            }
+            f.have_cwhole = 1;
+        }
         if (s == VV_OK)
             s = render_nodes(&f);
         /* quality 2 of a renderer that supersamples: its points, the nodes
@@ -1235,7 +1565,11 @@ drv_render_multires(const drv_renderer *r, const vv_world *w, int object,
         vv_region_image rwhole, rpiece;
         memset(&rays, 0, sizeof rays);
         rwhole = rpiece = (vv_region_image){0};
-        if (s == VV_OK && !lod->progressive) {
+        if (s == VV_OK && f.dc.split) {
+            /* the channels added (the second pass of quality 2 is for one image) */
+            dc_merge(wholes, f.dc.npass, w->background, out);
+            whole.image = NULL; /* finished */
+        } else if (s == VV_OK && !lod->progressive) {
             vv_region_image_finish(&whole, w->background);
             s = rays_begin(&whole, out, &rays, &rwhole, &rpiece);
             if (s == VV_OK && rays.n_pixels > 0) {
@@ -1263,5 +1597,7 @@ drv_render_multires(const drv_renderer *r, const vv_world *w, int object,
             f.clones[t].release(&f.clones[t]);
     vv_image_free(piece.image);
     free(whole.key);
+    dc_wholes_free(wholes, f.dc.npass);
+    dc_free(&f.dc);
     return s;
 }

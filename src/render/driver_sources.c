@@ -227,11 +227,6 @@ drv_render_sources(const drv_renderer *r, const vv_world *w, const vv_view *view
                                 "sources: object '%s': out-of-core rendering draws volume "
                                 "objects only",
                                 o->name);
-        if (o->n_channels > 1)
-            return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "sources: object '%s': a multi-channel object is drawn in memory "
-                                "(out of core, one channel an object)",
-                                o->name);
         if (n == VV_SOURCES_MAX)
             return vv_error_set(VV_ERR_LIMIT, "sources: more than %d visible objects",
                                 VV_SOURCES_MAX);
@@ -246,7 +241,11 @@ drv_render_sources(const drv_renderer *r, const vv_world *w, const vv_view *view
         l->geo = l->multires ? l->multires->level(l->multires->user, 0)
                  : l->bricks ? l->bricks->header(l->bricks->user)
                              : o->volume;
-        l->comp = o->mode == VV_MODE_COMPOSITE || o->mode == VV_MODE_ISO;
+        /* a multi-channel object: composited under the composite rule, a
+         * projection under the additive and maximum rules (as the ray
+         * caster orders them) */
+        l->comp = o->n_channels > 1 ? o->blend == VV_BLEND_COMPOSITE
+                                    : o->mode == VV_MODE_COMPOSITE || o->mode == VV_MODE_ISO;
     }
     if (n > 1 && (r->ops->info.caps & VV_RENDERER_GLOBAL))
         return vv_error_set(VV_ERR_UNSUPPORTED,

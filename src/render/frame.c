@@ -380,25 +380,61 @@ vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_
     if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "object '%s': solid textures are not rendered by regions", obj->name);
+    if (obj->n_channels > 1) {
+        /* the channels mixed sample by sample and composited (the
+         * composite rule): over, whatever the object's own mode */
+        if (obj->blend != VV_BLEND_COMPOSITE)
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "object '%s': its channels under the %s rule are drawn by regions "
+                                "a channel at a time (the drivers' way), not all at once",
+                                obj->name, vv_channel_blend_name(obj->blend));
+        if (!rg->channel_voxels)
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "object '%s' has %d channels; a region render of it needs every "
+                                "drawn channel's voxels (vv_render_region.channel_voxels)",
+                                obj->name, obj->n_channels);
+        *op = VV_REGION_OVER;
+        return VV_OK;
+    }
     *op = vv_region_op_for(obj->mode);
     return VV_OK;
 }
 
 vv_status
 vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
-                      vv_object *part) {
+                      vv_object *part, vv_channel **chan) {
+    *chan = NULL;
     vv_status s = vv_render_region_check(w, rg, op);
     if (s != VV_OK)
         return s;
-    *part = *w->objects[rg->object];
+    const vv_object *obj = w->objects[rg->object];
+    *part = *obj;
     part->volume = (vv_volume *)rg->voxels;
+    if (obj->n_channels > 1) {
+        vv_channel *c = malloc(sizeof *c * (size_t)obj->n_channels);
+        if (!c)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        for (int k = 0; k < obj->n_channels; k++) {
+            c[k] = obj->channels[k];
+            c[k].volume = (vv_volume *)rg->channel_voxels[k];
+            if (c[k].visible && !c[k].volume) {
+                free(c);
+                return vv_error_set(VV_ERR_INVALID,
+                                    "object '%s': channel %d is drawn but the region has no "
+                                    "voxels of it",
+                                    obj->name, k);
+            }
+        }
+        part->channels = c;
+        *chan = c;
+    }
     return VV_OK;
 }
 
 vv_status
 vv_render_region_world(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
                        vv_region_world *out) {
-    vv_status s = vv_render_region_part(w, rg, op, &out->part);
+    vv_status s = vv_render_region_part(w, rg, op, &out->part, &out->chan);
     if (s != VV_OK)
         return s;
     out->slot[0] = &out->part;
@@ -406,6 +442,14 @@ vv_render_region_world(const vv_world *w, const vv_render_region *rg, vv_region_
     out->world.objects = out->slot;
     out->world.n_objects = 1;
     return VV_OK;
+}
+
+void
+vv_region_world_release(vv_region_world *rw) {
+    if (!rw)
+        return;
+    free(rw->chan);
+    rw->chan = NULL;
 }
 
 void

@@ -39,11 +39,18 @@ vv_status vv_render_region_check(const vv_world *w, const vv_render_region *rg, 
 /**
  * vv_render_region_check, then *part = the region's object with its volume
  * replaced by the region's voxels (a shallow copy: nothing in it is
- * released; it lives as long as @p w and @p rg). Errors as
- * vv_render_region_check.
+ * released; it lives as long as @p w and @p rg). A multi-channel object
+ * drawn by the composite rule takes the region's channel_voxels: *chan a
+ * new array of its channels with those volumes (the part's channels; free
+ * it after the part), else NULL. Errors as vv_render_region_check;
+ * VV_ERR_UNSUPPORTED (a multi-channel object without channel voxels, or
+ * under the additive or maximum rule), VV_ERR_NOMEM.
  */
 vv_status vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
-                                vv_object *part);
+                                vv_object *part, vv_channel **chan);
+
+/** Frees what vv_render_region_world kept in @p rw (its part's channels). */
+void vv_region_world_release(vv_region_world *rw);
 
 /**
  * vv_render_region_part into @p out->part, and @p out->world a shallow copy

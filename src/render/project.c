@@ -144,6 +144,7 @@ vv_region_render_by_frame(vv_region_frame_fn frame, void *state, const vv_xray_t
     if (s != VV_OK)
         return s;
     s = frame(state, &rw.world, view, opt, region, out->image, out->key);
+    vv_region_world_release(&rw);
     const int table = out->op == VV_REGION_SUM || out->op == VV_REGION_ATTENUATED_MAX;
     out->classify = table ? vv_xray_table_classify : NULL;
     out->classify_ctx = table ? xray : NULL;

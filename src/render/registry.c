@@ -705,7 +705,7 @@ proxies_in_memory(const vv_world *w, vv_world **out) {
         vv_object *o = (*out)->objects[i];
         if (o->type == VV_OBJECT_VOLUME && o->source && o->volume &&
             vv_source_get_kind(o->source) != VV_SOURCE_MEMORY)
-            s = vv_object_set_volume(o, o->volume);
+            vv_object_drop_source(o);
     }
     if (s != VV_OK) {
         vv_world_free(*out);

@@ -148,88 +148,6 @@ world_for_grid(const vv_world_open_options *o, const char *what, vv_grid *g, vv_
     return s == VV_OK ? VV_OK : fail(s, what);
 }
 
-/* The file's channels as one object of several channels
- * (vv_object_set_channels), coloured and limited by the options or the
- * file's metadata, combined by the blend rule; one channel alone is a
- * one-channel object with that colour and contrast. */
-static vv_status
-world_for_channels(const vv_world_open_options *o, const char *what, int n, const int *channels,
-                   vv_world **out, vv_world_open_info *oi) {
-    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
-    vv_load_info info[VV_MAX_CHANNELS];
-    char names[VV_MAX_CHANNELS][VV_CHANNEL_NAME_MAX];
-    const char *np[VV_MAX_CHANNELS];
-    vv_status s = VV_OK;
-    for (int c = 0; c < n && s == VV_OK; c++) {
-        vv_load_options lo = o->load;
-        lo.channel = channels[c];
-        lo.info = &info[c];
-        vv_error_clear();
-        s = vv_volume_load(&v[c], what, &lo);
-        /* the file's name for the channel (OME Channel Name), else its index */
-        if (s == VV_OK && info[c].channel_name[0])
-            snprintf(names[c], sizeof names[c], "%s", info[c].channel_name);
-        else
-            snprintf(names[c], sizeof names[c], "channel %d", channels[c]);
-        np[c] = names[c];
-    }
-    if (s == VV_OK) { /* the file's channels and steps, as vv_open tells them */
-        oi->n_channels = info[0].n_channels > 1 ? info[0].n_channels : 1;
-        oi->n_times = info[0].n_times > 1 ? info[0].n_times : 1;
-    }
-    vv_default_scene_options d;
-    scene_options(o, &d);
-    if (s == VV_OK) {
-        vv_error_clear();
-        s = vv_world_new_for_volume(out, v[0], &d);
-    }
-    vv_object *obj = s == VV_OK ? (*out)->objects[0] : NULL;
-    if (obj && n > 1) {
-        vv_error_clear();
-        s = vv_object_set_channels(obj, n, v, np);
-        obj->blend = o->has_blend ? o->blend : VV_BLEND_COMPOSITE;
-        for (int c = 0; s == VV_OK && c < n; c++) {
-            obj->channels[c].index = channels[c];
-            if (o->label_channel[c])
-                s = vv_object_set_channel_labels(obj, c, 1);
-        }
-    }
-    for (int c = 0; obj && s == VV_OK && c < n; c++) {
-        vv_tf *tf = n > 1 ? &obj->channels[c].tf : &obj->tf;
-        double lo, hi;
-        if (c < o->n_contrast) {
-            lo = o->contrast[c][0];
-            hi = o->contrast[c][1];
-        } else if (n > 1) { /* vv_object_set_channels' quantiles */
-            lo = tf->opacity[0].value;
-            hi = tf->opacity[tf->n_opacity - 1].value;
-        } else {
-            vv_channel_default_contrast(v[0], &lo, &hi);
-        }
-        /* given colours, else the file's (OME Channel Color), else the default set */
-        vv_vec3 col = c < o->n_colors ? o->colors[c]
-                      : info[c].has_color
-                          ? vv_vec3_make(info[c].color[0], info[c].color[1], info[c].color[2])
-                          : vv_channel_default_color(c);
-        vv_error_clear();
-        s = vv_tf_set_contrast(tf, lo, hi, 1.0, 0.5, col, vv_tf_default_unit_distance(v[c]));
-        if (n == 1 && o->has_blend && o->blend == VV_BLEND_MAXIMUM)
-            obj->mode = VV_MODE_MIP;
-        if (n == 1 && o->label_channel[0])
-            obj->segmentation = VV_SEG_LABELS;
-    }
-    for (int c = 0; c < n; c++)
-        vv_volume_free(v[c]); /* the object holds its own references */
-    if (s != VV_OK) {
-        vv_world_free(*out);
-        *out = NULL;
-        return fail(s, what);
-    }
-    if (o->load.time >= 0)
-        obj->time = o->load.time; /* the file's step it shows */
-    return VV_OK;
-}
-
 /* 1: the caller asked for every channel by colours, contrast or a blend rule (the
  * file's channels must then fit them); 0: every channel only where it has several. */
 static int
@@ -287,9 +205,11 @@ static int
 too_big_for_memory(const vv_world_open_options *o, const char *what, const vv_open_options *oo,
                    vv_opened *od, vv_world_open_info *info) {
     const vv_renderer_info *in = vv_renderer_info_find(o->renderer ? o->renderer : "raycast");
-    if (oo->mode != VV_OPEN_DEFAULT || o->distributed || channels_asked(o) || o->load.time >= 0 ||
-        !in || !(in->caps & VV_RENDERER_REGION))
+    if (oo->mode != VV_OPEN_DEFAULT || o->distributed || o->load.time >= 0 || !in ||
+        !(in->caps & VV_RENDERER_REGION))
         return 0;
+    /* several channels: as many volumes (the first one's size each) */
+    const uint64_t nch = oo->n_channels > 1 ? (uint64_t)oo->n_channels : 1;
     const uint64_t budget = vv_memory_budget_get(), avail = vv_memory_available();
     uint64_t limit = budget / 4;
     limit = limit > avail / 4 ? avail / 4 : limit; /* a raised budget past a cgroup's limit */
@@ -298,6 +218,9 @@ too_big_for_memory(const vv_world_open_options *o, const char *what, const vv_op
     vv_open_options probe = *oo;
     probe.mode = VV_OPEN_OUT_OF_CORE_ONLY;
     probe.header_only = 1;
+    probe.n_channels = 0;
+    if (nch > 1)
+        probe.load.channel = oo->channels[0];
     vv_cache_set_limit(vv_cache_process(), limit);
     vv_error_clear();
     memset(od, 0, sizeof *od);
@@ -306,11 +229,12 @@ too_big_for_memory(const vv_world_open_options *o, const char *what, const vv_op
         const vv_volume *h = vv_source_level(od->source, 0);
         const int shaded =
             !o->has_mode || o->view.mode == VV_MODE_COMPOSITE || o->view.mode == VV_MODE_ISO;
-        need = h ? in_memory_bytes(h, shaded) : 0;
+        need = h ? in_memory_bytes(h, shaded) * nch : 0;
     }
     vv_opened_clear(od);
     vv_error_clear();
     probe.header_only = oo->header_only;
+    probe.n_channels = oo->n_channels;
     if (need <= budget || vv_open(od, what, &probe) != VV_OK) {
         vv_opened_clear(od);
         vv_error_clear(); /* read whole, as before */
@@ -370,6 +294,221 @@ pyramid_appearance(const vv_world_open_options *o, const char *what, vv_source *
     vv_opened_clear(&again);
 }
 
+/* What the file's metadata says of channel @p c (name, colour, window,
+ * inactive) and the default contrast of the channel: the options', else
+ * the metadata's window (omero start and end), else the quantiles of
+ * @p coarse (the coarsest level of a pyramid, whether read whole or out
+ * of core: the same either way), else of @p own (its voxels in memory). */
+static void
+channel_contrast(const vv_world_open_options *o, int c, const vv_load_info *info,
+                 const vv_volume *coarse, const vv_volume *own, double *lo, double *hi) {
+    if (c < o->n_contrast) {
+        *lo = o->contrast[c][0];
+        *hi = o->contrast[c][1];
+    } else if (info->has_window) {
+        *lo = info->window[0];
+        *hi = info->window[1];
+    } else {
+        vv_channel_default_contrast(coarse ? coarse : own, lo, hi);
+    }
+}
+
+/* The coarsest level of channel @p channel of a pyramid file of
+ * @p n_levels levels, read whole (small), or NULL (one level, or it could
+ * not be read: the caller's own volume gives the contrast then). */
+static vv_volume *
+coarsest_level(const vv_world_open_options *o, const char *what, int channel, int n_levels) {
+    if (n_levels < 2)
+        return NULL;
+    vv_load_options lo = o->load;
+    lo.channel = channel;
+    lo.level = n_levels - 1;
+    lo.info = NULL;
+    vv_volume *v = NULL;
+    if (vv_volume_load(&v, what, &lo) != VV_OK) {
+        vv_error_clear();
+        return NULL;
+    }
+    return v;
+}
+
+/* Appends @p w to @p oi's warning, once. */
+static void
+add_warning(vv_world_open_info *oi, const char *w) {
+    if (!w || !*w || strstr(oi->warning, w))
+        return;
+    const size_t n = strlen(oi->warning);
+    snprintf(oi->warning + n, sizeof oi->warning - n, "%s%s", n ? "; " : "", w);
+}
+
+/* Channels @p channels[0 .. n) of @p what opened together out of core,
+ * into *od, when the options ask for it or they do not fit in memory
+ * (too_big_for_memory): *opened 1. *opened 0: read them whole. Errors:
+ * VV_WORLD_OUT_OF_CORE of a file that cannot be read so, and those of
+ * opening it. */
+static vv_status
+channels_out_of_core(const vv_world_open_options *o, const char *what, int n, const int *channels,
+                     vv_opened *od, vv_world_open_info *oi, int *opened) {
+    *opened = 0;
+    memset(od, 0, sizeof *od);
+    if (o->memory == VV_WORLD_IN_MEMORY)
+        return VV_OK;
+    vv_open_options oo;
+    open_options(o, 0, &oo);
+    if (n > 1) {
+        oo.n_channels = n;
+        memcpy(oo.channels, channels, sizeof(int) * (size_t)n);
+    } else {
+        oo.load.channel = channels[0];
+    }
+    if (o->memory == VV_WORLD_OUT_OF_CORE && !o->distributed)
+        oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    vv_status s = VV_OK;
+    vv_error_clear();
+    if (too_big_for_memory(o, what, &oo, od, oi)) {
+        *opened = 1;
+        return VV_OK;
+    }
+    if (oo.mode == VV_OPEN_DEFAULT)
+        return VV_OK; /* fits: whole */
+    s = vv_open(od, what, &oo);
+    if (s == VV_ERR_UNSUPPORTED && oo.mode != VV_OPEN_OUT_OF_CORE_ONLY) {
+        vv_error_clear();
+        return VV_OK; /* cannot, and need not: whole */
+    }
+    if (s == VV_ERR_UNSUPPORTED && vv_error_message()[0]) /* the store's reason */
+        return fail(s, what);
+    if (s == VV_ERR_UNSUPPORTED)
+        return n > 1 ? vv_error_set(s,
+                                    "%s: cannot be read out of core: several channels are read "
+                                    "together from a pyramid (OME-Zarr, BigDataViewer, Imaris); "
+                                    "without --memory-limit they are read whole, or draw one "
+                                    "(--channel C)",
+                                    what)
+                     : vv_error_set(s,
+                                    "%s: cannot be read out of core (by bricks: .vvb, raw or "
+                                    "uncompressed NRRD; by levels: a pyramid); convert it to .vvb "
+                                    "first (volvis convert IN OUT.vvb)",
+                                    what);
+    if (s != VV_OK)
+        return fail(s, what);
+    if (od->kind != VV_DATA_VOLUME) {
+        vv_opened_clear(od);
+        return vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", what);
+    }
+    *opened = vv_source_get_kind(od->source) != VV_SOURCE_MEMORY;
+    if (!*opened)
+        vv_opened_clear(od);
+    return VV_OK;
+}
+
+/* The file's channels as one object of several channels, coloured,
+ * limited and shown by the options or the file's metadata (its names,
+ * colours, omero windows and active flags), combined by the blend rule;
+ * one channel alone is a one-channel object with that colour and
+ * contrast. In memory (each channel read whole) or out of core (one
+ * source carrying them all: vv_object_set_channels_source) as the options
+ * and the file's size decide; the defaults are the same either way. */
+static vv_status
+world_for_channels(const vv_world_open_options *o, const char *what, int n, const int *channels,
+                   vv_world **out, vv_world_open_info *oi) {
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    vv_volume *coarse[VV_MAX_CHANNELS] = {NULL};
+    vv_load_info info[VV_MAX_CHANNELS];
+    char names[VV_MAX_CHANNELS][VV_CHANNEL_NAME_MAX];
+    const char *np[VV_MAX_CHANNELS];
+    memset(info, 0, sizeof info);
+    vv_opened od;
+    int ooc = 0;
+    vv_status s = channels_out_of_core(o, what, n, channels, &od, oi, &ooc);
+    if (s != VV_OK)
+        return s;
+    if (ooc) {
+        for (int c = 0; c < n; c++)
+            info[c] = n > 1 ? od.ch_info[c] : od.info;
+    }
+    for (int c = 0; c < n && s == VV_OK && !ooc; c++) {
+        vv_load_options lo = o->load;
+        lo.channel = channels[c];
+        lo.level = o->level > 0 ? o->level : 0; /* a pyramid's level read whole */
+        lo.info = &info[c];
+        vv_error_clear();
+        s = vv_volume_load(&v[c], what, &lo);
+    }
+    for (int c = 0; c < n;
+         c++) { /* the file's name for the channel (OME Channel Name), else its index */
+        if (s == VV_OK && info[c].channel_name[0])
+            snprintf(names[c], sizeof names[c], "%s", info[c].channel_name);
+        else
+            snprintf(names[c], sizeof names[c], "channel %d", channels[c]);
+        np[c] = names[c];
+    }
+    if (s == VV_OK) { /* the file's channels and steps, as vv_open tells them */
+        oi->n_channels = info[0].n_channels > 1 ? info[0].n_channels : 1;
+        oi->n_times = info[0].n_times > 1 ? info[0].n_times : 1;
+        for (int c = 0; c < n; c++)
+            add_warning(oi, info[c].warning);
+    }
+    vv_default_scene_options d;
+    scene_options(o, &d);
+    const int level = o->level > 0 ? o->level : 0;
+    if (s == VV_OK) {
+        vv_error_clear();
+        s = ooc ? vv_world_new_for_source(out, od.source, level, &d)
+                : vv_world_new_for_volume(out, v[0], &d);
+    }
+    vv_object *obj = s == VV_OK ? (*out)->objects[0] : NULL;
+    if (obj && n > 1) {
+        vv_error_clear();
+        s = ooc ? vv_object_set_channels_source(obj, od.source, level, np)
+                : vv_object_set_channels(obj, n, v, np);
+        obj->blend = o->has_blend ? o->blend : VV_BLEND_COMPOSITE;
+        for (int c = 0; s == VV_OK && c < n; c++) {
+            obj->channels[c].index = channels[c];
+            obj->channels[c].visible = !info[c].inactive;
+            if (o->label_channel[c])
+                s = vv_object_set_channel_labels(obj, c, 1);
+        }
+    }
+    /* a pyramid's coarsest level gives the contrast, in memory as out of
+     * core (whose channels' volumes are those levels) */
+    const int n_levels = info[0].n_levels > 1 ? info[0].n_levels : 1;
+    for (int c = 0; obj && s == VV_OK && c < n; c++) {
+        if (c >= o->n_contrast && !info[c].has_window && !ooc)
+            coarse[c] = coarsest_level(o, what, channels[c], n_levels);
+        vv_tf *tf = n > 1 ? &obj->channels[c].tf : &obj->tf;
+        const vv_volume *own = n > 1 ? obj->channels[c].volume : obj->volume;
+        double lo, hi;
+        channel_contrast(o, c, &info[c], coarse[c], own, &lo, &hi);
+        /* given colours, else the file's (OME Channel Color), else the default set */
+        vv_vec3 col = c < o->n_colors ? o->colors[c]
+                      : info[c].has_color
+                          ? vv_vec3_make(info[c].color[0], info[c].color[1], info[c].color[2])
+                          : vv_channel_default_color(c);
+        /* opacity per the smallest voxel spacing of the level shown */
+        const double unit = tf->opacity_unit_distance;
+        vv_error_clear();
+        s = vv_tf_set_contrast(tf, lo, hi, 1.0, 0.5, col, unit);
+        if (n == 1 && o->has_blend && o->blend == VV_BLEND_MAXIMUM)
+            obj->mode = VV_MODE_MIP;
+        if (n == 1 && o->label_channel[0])
+            obj->segmentation = VV_SEG_LABELS;
+    }
+    for (int c = 0; c < n; c++) {
+        vv_volume_free(v[c]); /* the object holds its own references */
+        vv_volume_free(coarse[c]);
+    }
+    vv_opened_clear(&od);
+    if (s != VV_OK) {
+        vv_world_free(*out);
+        *out = NULL;
+        return fail(s, what);
+    }
+    if (o->load.time >= 0)
+        obj->time = o->load.time; /* the file's step it shows */
+    return VV_OK;
+}
+
 /* A volume file, a folder, a store or a grid: opened once through the
  * format table (vv_open), in memory or out of core as the options say (or
  * because it does not fit in memory: too_big_for_memory). */
@@ -394,6 +533,13 @@ world_for_file(const vv_world_open_options *o, const char *what, vv_world **out,
         s = vv_open(&od, what, &oo);
     if (s == VV_ERR_UNSUPPORTED && vv_error_message()[0]) /* the store's reason */
         return fail(s, what);
+    if (s == VV_ERR_UNSUPPORTED && o->all_channels)
+        return vv_error_set(s,
+                            "%s: cannot be read out of core (by bricks: .vvb, raw or "
+                            "uncompressed NRRD, one channel; by levels: a pyramid, its channels "
+                            "together); convert it to .vvb first (volvis convert IN OUT.vvb, a "
+                            "channel at a time), or read it whole (no --memory-limit)",
+                            what);
     if (s == VV_ERR_UNSUPPORTED)
         return vv_error_set(s,
                             "%s: cannot be read out of core (by bricks: .vvb, raw or "
@@ -404,9 +550,10 @@ world_for_file(const vv_world_open_options *o, const char *what, vv_world **out,
         info->n_channels = od.info.n_channels > 1 ? od.info.n_channels : 1;
         info->n_times = od.info.n_times > 1 ? od.info.n_times : 1;
     }
+    if (s == VV_OK && od.kind == VV_DATA_VOLUME)
+        add_warning(info, od.info.warning);
     if (s == VV_OK && od.kind == VV_DATA_VOLUME &&
-        (channels_asked(o) || (o->all_channels && info->n_channels > 1 &&
-                               vv_source_get_kind(od.source) == VV_SOURCE_MEMORY))) {
+        (channels_asked(o) || (o->all_channels && info->n_channels > 1))) {
         /* every channel of the file, as one object (not asked for: the first ones) */
         const int n = channels_asked(o) || info->n_channels <= VV_MAX_CHANNELS ? info->n_channels
                                                                                : VV_MAX_CHANNELS;

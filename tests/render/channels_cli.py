@@ -175,7 +175,8 @@ bad = [
     ([ome, "--channels", "0,1", "--colors", "red,green,blue"], "3 given for 2 channels", 2),
     ([ome, "--colors", "red,green,blue,white"], "4 given for the file's 3 channels", 2),
     ([ome, "--colors", "red", "--channel", "1"], "not with --channel C", 2),
-    ([ome, "--blend", "maximum", "--memory-limit", "1G"], "one channel at a time", 2),
+    ([ome, "--blend", "maximum", "--memory-limit", "1G"], "its channels together", 1),
+    ([ome, "--channels", "0,1", "--memory-limit", "1G"], "several channels are read together", 1),
     ([ome, "--channels", "0,0"], "twice", 2),
     ([ome, "--channels", "0,1", "--mode", "mip"], "--blend", 2),
 ]

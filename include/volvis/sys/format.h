@@ -43,8 +43,9 @@
 extern "C" {
 #endif
 
-/** The version of the records of this header. */
-#define VV_FORMAT_RECORD_VERSION 2
+/** The version of the records of this header (version 2 records, without
+ *  open_store_channels, are registered too). */
+#define VV_FORMAT_RECORD_VERSION 3
 
 /** What a format record says about its format (vv_format_record.flags). */
 enum {
@@ -176,6 +177,18 @@ typedef struct vv_format_record {
     /* ---- meshes ---- */
     /** Reads @p path with the contract of vv_mesh_load. */
     vv_status (*read_mesh)(vv_mesh **out, const char *path);
+
+    /* ---- version 3 ---- */
+    /**
+     * Optional (NULL: open_store a channel at a time, the stores stacked by
+     * vv_store_stack): opens @p path's levels of channels @p channels[0 ..
+     * n) at step @p time as one store whose reads fill every channel
+     * (vv_store.n_ch = n), a chunk holding several of them decoded once;
+     * @p info[k] (may be NULL) gets channel k's name, colour and window,
+     * info[0] the counts.
+     */
+    vv_status (*open_store_channels)(vv_store *st, const char *path, int n, const int *channels,
+                                     int time, vv_load_info *info);
 } vv_format_record;
 
 /** The extensions @p f writes (write_extensions, else extensions); NULL

@@ -203,6 +203,25 @@ typedef struct vv_render_region {
      * alike (attenuated MIP's exponents, VV_REGION_ATTENUATED_MAX).
      */
     double step_scale;
+    /**
+     * A multi-channel object (vv_object.n_channels > 1, drawn by its
+     * channels under the composite rule): channel_voxels[c] the voxels of
+     * the object's channel c over the same box as `voxels` (which is the
+     * first drawn channel's), each with that channel's value range; NULL
+     * for a channel not drawn. NULL (an initializer's default): an object
+     * of one channel. The additive and maximum rules combine the channels
+     * only after each is composited or projected along the whole ray, so a
+     * driver draws such an object a channel at a time, each channel an
+     * object of its own. Borrowed.
+     */
+    const vv_volume *const *channel_voxels;
+    /**
+     * With channel_voxels: the whole volume of each channel (object channel
+     * order, as `whole` is for one channel), for the global effects of a
+     * frame drawn at level 0 from coarse proxies (the ray tracer's shadows
+     * through every channel); NULL: none. Borrowed.
+     */
+    const vv_region_volume *channel_whole;
 } vv_render_region;
 
 /** A region render's output: the partial image and how it combines. */
@@ -356,6 +375,9 @@ typedef struct vv_region_world {
     vv_object part;     /**< the object, its volume the region's voxels */
     vv_object *slot[1]; /**< world's object array: &part */
     vv_world world;     /**< the World to render */
+    /** a multi-channel part's channels (their volumes the region's channel voxels), or
+     *  NULL; owned: vv_region_world_release frees them */
+    vv_channel *chan;
 } vv_region_world;
 
 /** Clears @p img to "nothing seen": colour 0, depth INFINITY, key NAN. */

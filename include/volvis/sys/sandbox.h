@@ -57,7 +57,7 @@ typedef enum vv_sandbox_op {
 
 /** Bytes of a call's arguments and of a result's info at most. */
 #define VV_SANDBOX_ARGS_MAX 256
-#define VV_SANDBOX_INFO_MAX 256
+#define VV_SANDBOX_INFO_MAX 1024
 /** Bytes of a format's name in a call, with its NUL. */
 #define VV_SANDBOX_NAME_MAX 32
 

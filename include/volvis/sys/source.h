@@ -71,7 +71,7 @@ typedef struct vv_brick_source {
 } vv_brick_source;
 
 /** The version of vv_multires_source this header describes. */
-#define VV_MULTIRES_SOURCE_VERSION 2
+#define VV_MULTIRES_SOURCE_VERSION 3
 
 /**
  * A multiresolution (pyramid) volume as its consumers see it: levels 0
@@ -155,12 +155,40 @@ typedef struct vv_multires_source {
      * stopped short because the source's cache is full of chunks it wants.
      */
     int (*stalled)(void *user);
+    /* ---- version 3: channels ---- */
+    /**
+     * The channels each box carries (0 or 1: one). More: the source's
+     * chunks hold every channel (the cache counts them all, a node's
+     * channels arrive together, a progressive frame draws a node at one
+     * level for all of them), read_box, box_range and level speak of
+     * channel 0, and the driver reads a node by read_channels.
+     */
+    int n_channels;
+    /**
+     * n_channels > 1: voxels lo .. hi of @p level of every channel at once,
+     * out[k] channel k's new volume as read_box makes it (with that
+     * channel's value range); one read of the plan (it moves on once).
+     * Errors: as read_box; nothing is set in @p out then.
+     */
+    vv_status (*read_channels)(void *user, int level, const int lo[3], const int hi[3],
+                               vv_volume **out);
+    /** n_channels > 1: box_range of channel @p channel. */
+    int (*channel_range)(void *user, int channel, int level, const int lo[3], const int hi[3],
+                         float *vmin, float *vmax);
+    /** n_channels > 1: level's header with channel @p channel's value range. Borrowed. */
+    const vv_volume *(*channel_level)(void *user, int channel, int level);
+    /** n_channels > 1: read_box of channel @p channel outside the frame's plan (the plan
+     *  stays where it is): what a whole-volume sweep reads (shadows). */
+    vv_status (*channel_read_box)(void *user, int channel, int level, const int lo[3],
+                                  const int hi[3], vv_volume **out);
 } vv_multires_source;
 
 /* ---- chunked stores: a multiresolution format's side of a pyramid ------------------ */
 
 /** Levels a store holds at most. */
 #define VV_STORE_MAX_LEVELS VV_SOURCE_MAX_LEVELS
+/** Channels one read of a store fills at most (VV_MAX_CHANNELS, model.h). */
+#define VV_STORE_MAX_CHANNELS 16
 
 /** One level of a store. */
 typedef struct vv_store_level {
@@ -243,6 +271,23 @@ typedef struct vv_store {
                            const int *org, const int *dims, int nthreads, int *missing,
                            uint64_t *file_bytes, double *range,
                            int (*stale)(void *stale_user, int i), void *stale_user, int *cancelled);
+    /* ---- channels ---- */
+    /**
+     * The channels one read fills (0 or 1: one, the channel the store was
+     * opened for; at most VV_STORE_MAX_CHANNELS): read_chunk and read_many
+     * write them one after another at dst, channel k's block of dims voxels
+     * at k times its bytes (x fastest, the level's type), and read_many's
+     * @p range holds 2 n_ch numbers a chunk (chunk i's channel k least at
+     * range[2 (i n_ch + k)], greatest after it). *missing: 1 when every
+     * channel's chunk is absent. A store that chunks its channels together
+     * (an OME-Zarr array chunked by several along c) decodes such a chunk
+     * once for all the channels it holds. chunk_range is then not used.
+     */
+    int n_ch;
+    /** n_ch > 1: 1 where ch_range[k] is channel k's data range from the metadata (its omero
+     *  window's min and max), as has_range and range are for one channel */
+    int ch_has_range[VV_STORE_MAX_CHANNELS];
+    double ch_range[VV_STORE_MAX_CHANNELS][2];
 } vv_store;
 
 /**
@@ -256,10 +301,24 @@ vv_status vv_store_set_level(vv_store *st, int level, vv_voxel_type type, const 
 /** Frees what a store holds (its headers and, through close, its state); zeroes it. */
 void vv_store_close(vv_store *st);
 
+/**
+ * The stores @p parts[0 .. n) (n 1 .. VV_STORE_MAX_CHANNELS, each of one
+ * channel of the same file: the same levels, dims, chunk boxes, type and
+ * geometry) as one store of n channels in @p out (n_ch = n; channel k is
+ * parts[k]'s): a chunk read reads each part's chunk in turn into its
+ * channel's block. What a format whose stores hold one channel (the HDF5
+ * pyramids, in the reader sandbox or here) carries channels by. The parts
+ * are taken (closed, also on error) and zeroed. Errors: VV_ERR_INVALID (n
+ * out of range, a part of several channels), VV_ERR_FORMAT (parts that
+ * differ: named by channel and level), VV_ERR_NOMEM.
+ */
+vv_status vv_store_stack(vv_store *out, vv_store *parts, int n);
+
 /* ---- the table a source fills in ------------------------------------------------- */
 
-/** The version of vv_source_ops this header describes. */
-#define VV_SOURCE_OPS_VERSION 1
+/** The version of vv_source_ops this header describes (version 1 tables, without
+ *  channels, are taken too). */
+#define VV_SOURCE_OPS_VERSION 2
 
 /**
  * One kind of source. Every method takes the @p user given to
@@ -286,6 +345,16 @@ typedef struct vv_source_ops {
     void (*cancel)(void *user);
     /** Closes the file and frees @p user (its pieces leave the cache). */
     void (*close)(void *user);
+    /* ---- version 2: channels (optional, NULL: one channel) ---- */
+    /** The channels each piece carries (>= 1). */
+    int (*channels)(void *user);
+    /** Level @p level's geometry with channel @p channel's value range. Borrowed. */
+    const vv_volume *(*channel_level)(void *user, int channel, int level);
+    /** read_box of channel @p channel. Thread-safe. */
+    vv_status (*channel_read_box)(void *user, int channel, int level, const int lo[3],
+                                  const int hi[3], vv_volume **out);
+    /** proxy of channel @p channel. */
+    vv_status (*channel_proxy)(void *user, int channel, int level, vv_volume **out);
 } vv_source_ops;
 
 /**

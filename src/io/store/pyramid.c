@@ -101,6 +101,36 @@ count_read(vv_pyramid *p, int level, uint64_t L, uint64_t file_bytes) {
         p->st.max_reads_per_frame = l->frame_reads[L];
 }
 
+/* The voxels of one channel of entry @p c, bytes. */
+static size_t
+plane_bytes(const py_chunk *c) {
+    return (size_t)c->n[0] * (size_t)c->n[1] * (size_t)c->n[2] * vv_voxel_type_size(c->blk->type);
+}
+
+/* Entry @p c's block read: each channel's range measured into c->rng
+ * (one channel: the block's own range too). */
+static void
+measure_block(const vv_pyramid *p, py_chunk *c) {
+    if (p->n_ch <= 1) {
+        vv_volume_update_range(c->blk);
+        c->rng[0][0] = (float)c->blk->range[0];
+        c->rng[0][1] = (float)c->blk->range[1];
+        return;
+    }
+    const size_t pb = plane_bytes(c), n = pb / vv_voxel_type_size(c->blk->type);
+    double all[2] = {INFINITY, -INFINITY};
+    for (int k = 0; k < p->n_ch; k++) {
+        double r[2] = {INFINITY, -INFINITY};
+        vv_range_accumulate(c->blk->type, (const unsigned char *)c->blk->data + (size_t)k * pb, n,
+                            r);
+        c->rng[k][0] = (float)r[0];
+        c->rng[k][1] = (float)r[1];
+        all[0] = r[0] < all[0] ? r[0] : all[0];
+        all[1] = r[1] > all[1] ? r[1] : all[1];
+    }
+    vv_volume_set_range(c->blk, all);
+}
+
 /* Chunk entry @p c (position @p cc) read from the store into its block,
  * one reader at a time when the store is not parallel; any thread, the
  * pyramid's lock not held. */
@@ -110,12 +140,12 @@ py_read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratc
     const vv_store *st = &p->store;
     if (!st->parallel)
         pthread_mutex_lock(&p->store_lock);
-    const vv_status s = st->read_chunk(st->ctx, c->level, cc, scratch, c->blk->data, c->org,
-                                       c->blk->dims, missing, file_bytes);
+    const vv_status s = st->read_chunk(st->ctx, c->level, cc, scratch, c->blk->data, c->org, c->n,
+                                       missing, file_bytes);
     if (!st->parallel)
         pthread_mutex_unlock(&p->store_lock);
     if (s == VV_OK)
-        vv_volume_update_range(c->blk);
+        measure_block(p, c);
     return s;
 }
 
@@ -193,9 +223,10 @@ py_read_many(vv_pyramid *p, py_chunk **chunks, int n, int nthreads, uint64_t *fi
     const vv_store *st = &p->store;
     if (n < 1)
         return VV_OK;
+    const int nch = p->n_ch > 1 ? p->n_ch : 1;
     int *c = calloc(9 * (size_t)n, sizeof(int));
     unsigned char **dst = calloc((size_t)n, sizeof *dst);
-    double *range = calloc(2 * (size_t)n, sizeof *range);
+    double *range = calloc(2 * (size_t)n * (size_t)nch, sizeof *range);
     if (!c || !dst || !range) {
         free(c);
         free(dst);
@@ -208,7 +239,7 @@ py_read_many(vv_pyramid *p, py_chunk **chunks, int n, int nthreads, uint64_t *fi
         for (int k = 0; k < 3; k++) {
             c[3 * i + k] = chunks[i]->org[k] / l->cdims[k];
             org[3 * i + k] = chunks[i]->org[k];
-            dims[3 * i + k] = chunks[i]->blk->dims[k];
+            dims[3 * i + k] = chunks[i]->n[k];
         }
         dst[i] = chunks[i]->blk->data;
     }
@@ -218,9 +249,19 @@ py_read_many(vv_pyramid *p, py_chunk **chunks, int n, int nthreads, uint64_t *fi
     const vv_status s =
         st->read_many(st->ctx, chunks[0]->level, n, c, dst, org, dims, nthreads, missing,
                       file_bytes, range, cancelled ? py_stale : NULL, &ask, cancelled);
-    for (int i = 0; s == VV_OK && i < n; i++) /* taken as the store copied them in */
-        if (!cancelled || !cancelled[i])
-            vv_volume_set_range(chunks[i]->blk, range + 2 * i);
+    for (int i = 0; s == VV_OK && i < n; i++) { /* taken as the store copied them in */
+        if (cancelled && cancelled[i])
+            continue;
+        double all[2] = {INFINITY, -INFINITY};
+        for (int k = 0; k < nch; k++) {
+            const double *r = range + 2 * ((size_t)i * (size_t)nch + (size_t)k);
+            chunks[i]->rng[k][0] = (float)r[0];
+            chunks[i]->rng[k][1] = (float)r[1];
+            all[0] = r[0] < all[0] ? r[0] : all[0];
+            all[1] = r[1] > all[1] ? r[1] : all[1];
+        }
+        vv_volume_set_range(chunks[i]->blk, all);
+    }
     free(c);
     free(dst);
     free(range);
@@ -298,18 +339,18 @@ decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *
     return VV_OK;
 }
 
-/* Copies the part of chunk block @p c inside box lo .. of @p out. */
+/* Copies the part of channel @p ch of chunk block @p c inside box lo .. of @p out. */
 static void
-copy_block(const py_chunk *c, const int lo[3], vv_volume *out) {
+copy_block(const py_chunk *c, int ch, const int lo[3], vv_volume *out) {
     const size_t vs = vv_voxel_type_size(out->type);
     int a[3], b[3];
     for (int k = 0; k < 3; k++) {
         a[k] = c->org[k] > lo[k] ? c->org[k] : lo[k];
-        const int ce = c->org[k] + c->blk->dims[k] - 1, oe = lo[k] + out->dims[k] - 1;
+        const int ce = c->org[k] + c->n[k] - 1, oe = lo[k] + out->dims[k] - 1;
         b[k] = ce < oe ? ce : oe;
     }
     const size_t n = (size_t)(b[0] - a[0] + 1) * vs;
-    const unsigned char *src = c->blk->data;
+    const unsigned char *src = (const unsigned char *)c->blk->data + (size_t)ch * plane_bytes(c);
     unsigned char *dst = out->data;
     for (int z = a[2]; z <= b[2]; z++)
         for (int y = a[1]; y <= b[1]; y++) {
@@ -337,10 +378,17 @@ py_new_entry(const vv_pyramid *p, int level, const int c[3]) {
     e->level = level;
     e->L = py_chunk_linear(l, c);
     chunk_box(l, c, e->org, e->n);
-    e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * l->esize;
+    e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * l->esize *
+               (uint64_t)(p->n_ch > 1 ? p->n_ch : 1);
     e->state = PY_NEW;
     e->ce.pins = 1;
     return e;
+}
+
+vv_status
+py_alloc_block(const vv_pyramid *p, py_chunk *e) {
+    const int d[3] = {e->n[0], e->n[1], e->n[2] * (p->n_ch > 1 ? p->n_ch : 1)};
+    return vv_volume_new(&e->blk, d, p->lv[e->level].type);
 }
 
 /* Entry @p e into the cache (its bytes held, most recently used) and the
@@ -365,8 +413,11 @@ py_entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
     count_read(p, e->level, e->L, file_bytes);
     p->st.missing += (uint64_t)missing;
     if (l->known) {
-        l->cmin[e->L] = (float)e->blk->range[0];
-        l->cmax[e->L] = (float)e->blk->range[1];
+        const int nch = p->n_ch > 1 ? p->n_ch : 1;
+        for (int k = 0; k < nch; k++) {
+            l->cmin[e->L * (uint64_t)nch + (uint64_t)k] = e->rng[k][0];
+            l->cmax[e->L * (uint64_t)nch + (uint64_t)k] = e->rng[k][1];
+        }
         l->known[e->L] = 1;
     }
     p->arrivals++;
@@ -379,12 +430,14 @@ py_unpin(vv_pyramid *p, py_chunk *e) {
         py_drop_chunk(p, e);
 }
 
-/* Box lo .. hi of @p level into @p out from the cache (lock held; it is
- * released while chunks are decoded): the chunks missing are reserved in
- * the cache (PY_NEW) and decoded here, those a loader is decoding are
- * waited for, and one whose loader failed is decoded again here. */
+/* Box lo .. hi of @p level into @p out[0 .. nout) (channels ch0 ..) from
+ * the cache (lock held; it is released while chunks are decoded): the
+ * chunks missing are reserved in the cache (PY_NEW) and decoded here,
+ * those a loader is decoding are waited for, and one whose loader failed
+ * is decoded again here. */
 static vv_status
-assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *out) {
+assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], int ch0, int nout,
+         vv_volume **out) {
     py_level *l = &p->lv[level];
     int c0[3], c1[3];
     py_chunk_span(l, lo, hi, c0, c1);
@@ -440,7 +493,7 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                 e->state = PY_LOADING;
                 vv_volume_free(e->blk);
                 e->blk = NULL;
-                if ((s = vv_volume_new(&e->blk, e->n, l->type)) != VV_OK)
+                if ((s = py_alloc_block(p, e)) != VV_OK)
                     e->state = PY_FAILED;
                 todo[nt++] = e;
             } else if (e->state == PY_LOADING) {
@@ -470,7 +523,8 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
             pthread_cond_wait(&p->arrived, p->lock);
     }
     for (int i = 0; i < nu && s == VV_OK; i++)
-        copy_block(use[i], lo, out);
+        for (int k = 0; k < nout; k++)
+            copy_block(use[i], ch0 + k, lo, out[k]);
     for (int i = 0; i < nu; i++)
         py_unpin(p, use[i]);
     free(use);
@@ -480,16 +534,16 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
     return s;
 }
 
-/* The header of a level: its geometry with the store's range. */
+/* The header of a level: its geometry with channel @p ch's range. */
 static void
-set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
+set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l, int ch) {
     memcpy(v->spacing, l->hdr->spacing, sizeof v->spacing);
     memcpy(v->origin, l->hdr->origin, sizeof v->origin);
     memcpy(v->direction, l->hdr->direction, sizeof v->direction);
     v->unit = l->hdr->unit;
     v->modification = l->hdr->modification;
-    v->range[0] = p->range[0];
-    v->range[1] = p->range[1];
+    v->range[0] = p->crange[ch][0];
+    v->range[1] = p->crange[ch][1];
 }
 
 /* Box lo .. hi of @p level into a new volume; @p planned (not NULL): a
@@ -499,11 +553,14 @@ set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
  * (pyramid_load.c); any other read (a slice, a measurement, another
  * thread) leaves the plan as it is. */
 vv_status
-py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out,
-            void (*planned)(vv_pyramid *p, vv_status s)) {
-    if (!p || !out || level < 0 || level >= p->n_levels)
+py_box_read(vv_pyramid *p, int level, int channel, const int lo[3], const int hi[3],
+            vv_volume **out, void (*planned)(vv_pyramid *p, vv_status s)) {
+    const int nch = p && p->n_ch > 1 ? p->n_ch : 1;
+    if (!p || !out || level < 0 || level >= p->n_levels || channel < -1 || channel >= nch)
         return vv_error_set(VV_ERR_INVALID, "pyramid: bad arguments");
-    *out = NULL;
+    const int ch0 = channel < 0 ? 0 : channel, nout = channel < 0 ? nch : 1;
+    for (int k = 0; k < nout; k++)
+        out[k] = NULL;
     const py_level *l = &p->lv[level];
     int dims[3];
     for (int k = 0; k < 3; k++) {
@@ -512,36 +569,64 @@ py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volum
                                 lo[k], hi[k], level, l->dims[k]);
         dims[k] = hi[k] - lo[k] + 1;
     }
-    vv_volume *v = NULL;
-    vv_status s = vv_volume_new(&v, dims, l->type);
+    vv_volume *v[VV_STORE_MAX_CHANNELS] = {NULL};
+    vv_status s = VV_OK;
+    for (int k = 0; k < nout && s == VV_OK; k++)
+        s = vv_volume_new(&v[k], dims, l->type);
     pthread_mutex_lock(p->lock);
     if (s == VV_OK)
-        s = assemble(p, level, lo, hi, v);
+        s = assemble(p, level, lo, hi, ch0, nout, v);
     if (planned)
         planned(p, s);
     pthread_mutex_unlock(p->lock);
     if (s != VV_OK) {
-        vv_volume_free(v);
+        for (int k = 0; k < nout; k++)
+            vv_volume_free(v[k]);
         return vv_pyramid_prefix(s, p->store.name, p->path);
     }
-    set_geometry(v, p, l);
-    *out = v;
+    for (int k = 0; k < nout; k++) {
+        set_geometry(v[k], p, l, ch0 + k);
+        out[k] = v[k];
+    }
     return VV_OK;
 }
 
 vv_status
 vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    return py_box_read(p, level, lo, hi, out, NULL);
+    return py_box_read(p, level, 0, lo, hi, out, NULL);
+}
+
+int
+vv_pyramid_channels(const vv_pyramid *p) {
+    return p && p->n_ch > 1 ? p->n_ch : 1;
+}
+
+const vv_volume *
+vv_pyramid_channel_level(const vv_pyramid *p, int channel, int level) {
+    if (!p || level < 0 || level >= p->n_levels || channel < 0 || channel >= vv_pyramid_channels(p))
+        return NULL;
+    return channel == 0 ? p->lv[level].hdr : p->lv[level].chdr[channel];
+}
+
+vv_status
+vv_pyramid_channel_read_box(vv_pyramid *p, int channel, int level, const int lo[3], const int hi[3],
+                            vv_volume **out) {
+    return py_box_read(p, level, channel, lo, hi, out, NULL);
 }
 
 vv_status
 vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out) {
+    return vv_pyramid_channel_proxy(p, 0, level, out);
+}
+
+vv_status
+vv_pyramid_channel_proxy(vv_pyramid *p, int channel, int level, vv_volume **out) {
     if (!p || !out || level < 0 || level >= p->n_levels)
         return vv_error_set(VV_ERR_INVALID, "pyramid: no level %d for a proxy", level);
     const int top = p->n_levels - 1;
     const vv_volume *h = p->lv[top].hdr, *f = p->lv[level].hdr;
     const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
-    const vv_status s = vv_pyramid_read_box(p, top, lo, hi, out);
+    const vv_status s = py_box_read(p, top, channel, lo, hi, out, NULL);
     if (s != VV_OK)
         return s;
     vv_volume *v = *out;

@@ -87,7 +87,31 @@ typedef struct vv_pyramid_stats {
  */
 vv_status vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time,
                           vv_cache *cache, vv_load_info *info);
+/**
+ * vv_pyramid_open of channels @p channels[0 .. n) (n 1 ..
+ * VV_STORE_MAX_CHANNELS, each of the file's, in the order given) at once:
+ * each chunk of the pyramid holds them all (read together, cached and
+ * counted together; an OME-Zarr chunk holding several of them decoded
+ * once), channel k's value range the omero window's of channels[k], else
+ * the coarsest level's of that channel. @p info[k] (may be NULL; n
+ * entries) gets channel k's name and colour (info[0] the counts). A format
+ * whose store holds one channel has its stores stacked (vv_store_stack).
+ * Errors: as vv_pyramid_open; VV_ERR_INVALID (n out of range, a channel
+ * the file does not have); VV_ERR_FORMAT (a channel axis chunked
+ * differently at two levels).
+ */
+vv_status vv_pyramid_open_channels(vv_pyramid **out, const char *path, int n, const int *channels,
+                                   int time, vv_cache *cache, vv_load_info *info);
 void vv_pyramid_free(vv_pyramid *p);
+/** The channels each chunk holds (>= 1). */
+int vv_pyramid_channels(const vv_pyramid *p);
+/** vv_pyramid_level with channel @p channel's value range (borrowed); NULL out of range. */
+const vv_volume *vv_pyramid_channel_level(const vv_pyramid *p, int channel, int level);
+/** vv_pyramid_read_box of channel @p channel (its value range). */
+vv_status vv_pyramid_channel_read_box(vv_pyramid *p, int channel, int level, const int lo[3],
+                                      const int hi[3], vv_volume **out);
+/** vv_pyramid_proxy of channel @p channel. */
+vv_status vv_pyramid_channel_proxy(vv_pyramid *p, int channel, int level, vv_volume **out);
 /** The path it was opened from (borrowed). */
 const char *vv_pyramid_path(const vv_pyramid *p);
 /** The cache holding its chunks (borrowed). */
@@ -184,6 +208,15 @@ vv_status vv_pyramid_open_store(vv_pyramid **out, vv_store *st, const char *path
 /** The OME-Zarr store of @p path (channel, time step, level 0's info). */
 vv_status vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time,
                               vv_load_info *info);
+/**
+ * The OME-Zarr store of @p path for channels @p channels[0 .. n) at step
+ * @p time: a read fills every channel (vv_store.n_ch = n; a chunk holding
+ * several of them decoded once); @p info[k] (may be NULL) channel k's
+ * name, colour and counts. Errors: as vv_zr_pyramid_store; VV_ERR_FORMAT
+ * when the channel axis is chunked differently at two levels.
+ */
+vv_status vv_zr_pyramid_store_channels(vv_store *st, const char *path, int n, const int *channels,
+                                       int time, vv_load_info *info);
 
 /** Voxel @p i of @p d (of type @p t) as a double. */
 double vv_pyr_voxel(const void *d, vv_voxel_type t, size_t i);

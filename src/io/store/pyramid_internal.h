@@ -45,7 +45,10 @@ typedef struct py_chunk {
     uint64_t L;
     py_use *use;      /* its uses in the plan, or NULL */
     int org[3], n[3]; /* the block's first voxel in the level, its size */
-    vv_volume *blk;   /* the chunk's voxels inside the array */
+    /* the chunk's voxels inside the array: n[0] x n[1] x n[2] of each
+     * channel, the channels one after another along z (py_alloc_block) */
+    vv_volume *blk;
+    float rng[VV_STORE_MAX_CHANNELS][2]; /* each channel's least and greatest voxel, once read */
     uint64_t bytes;
     int state; /* PY_READY, ... */
     struct py_chunk *hnext;
@@ -60,11 +63,13 @@ typedef struct py_req {
 typedef struct py_level {
     int dims[3], cdims[3], nchunks[3];
     vv_voxel_type type;
-    size_t esize;
+    size_t esize;   /* bytes a voxel of one channel */
     vv_volume *hdr; /* geometry only: 1-voxel data, dims set to the level's */
+    /* channels 1 .. n_ch - 1: the header with the channel's range */
+    vv_volume *chdr[VV_STORE_MAX_CHANNELS];
     uint64_t n_chunks;
-    float *cmin, *cmax;    /* per chunk, when known */
-    uint8_t *known;        /* 1: cmin/cmax hold the chunk's range */
+    float *cmin, *cmax;    /* per chunk and channel (L n_ch + k), when known */
+    uint8_t *known;        /* 1: cmin/cmax hold the chunk's ranges */
     uint32_t *read_frame;  /* the frame of the chunk's last read */
     uint16_t *frame_reads; /* its reads in that frame */
 } py_level;
@@ -75,7 +80,9 @@ struct vv_pyramid {
     vv_store store;
     int n_levels;
     py_level lv[VV_PYRAMID_MAX_LEVELS];
-    double range[2];
+    double range[2]; /* channel 0's (crange[0]) */
+    int n_ch;        /* channels a chunk holds (the store's n_ch, >= 1) */
+    double crange[VV_STORE_MAX_CHANNELS][2];
     uint64_t limit, n_ready;
     int boxes;      /* boxes held at once (vv_multires_source.boxes) */
     int node_cells; /* the octree leaves' side the limit holds */
@@ -172,6 +179,8 @@ vv_status py_read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned ch
 /* A new entry for chunk @p c of level @p level (PY_NEW, pinned once, not
  * yet in the cache); NULL when out of memory. */
 py_chunk *py_new_entry(const vv_pyramid *p, int level, const int c[3]);
+/* Entry @p e's block (its voxels of every channel) allocated; VV_ERR_NOMEM. */
+vv_status py_alloc_block(const vv_pyramid *p, py_chunk *e);
 /* Entry @p e into the cache and the pyramid's index. */
 void py_insert_entry(vv_pyramid *p, py_chunk *e);
 /* Entry @p e decoded: ready, its range known, the read counted. */
@@ -182,11 +191,13 @@ void py_unpin(vv_pyramid *p, py_chunk *e);
 void py_drop_chunk(vv_pyramid *p, py_chunk *c);
 /* The pyramid's cache client's drop: the cache evicts chunk @p e. */
 void py_client_drop(vv_cache_client *cl, vv_cache_entry *e);
-/* Box lo .. hi of @p level into a new volume. Takes the lock itself;
- * @p planned (NULL: a read outside the frame's plan) is called with it
- * held once the box is assembled, @p s saying how that went. */
-vv_status py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out,
-                      void (*planned)(vv_pyramid *p, vv_status s));
+/* Box lo .. hi of @p level of channel @p channel into a new volume *out,
+ * or with @p channel -1 of every channel, out[k] channel k's. Takes the
+ * lock itself; @p planned (NULL: a read outside the frame's plan) is
+ * called with it held once the box is assembled, @p s saying how that
+ * went. */
+vv_status py_box_read(vv_pyramid *p, int level, int channel, const int lo[3], const int hi[3],
+                      vv_volume **out, void (*planned)(vv_pyramid *p, vv_status s));
 
 /* ---- pyramid_load.c ------------------------------------------------------------- */
 

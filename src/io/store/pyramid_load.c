@@ -164,8 +164,7 @@ take_queued(vv_pyramid *p, int level, int c[3]) {
         c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
         c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
         py_chunk *x = py_new_entry(p, q.level, c);
-        if (!x || !vv_cache_make_room(p->cache, x->bytes, 1) ||
-            vv_volume_new(&x->blk, x->n, l->type) != VV_OK) {
+        if (!x || !vv_cache_make_room(p->cache, x->bytes, 1) || py_alloc_block(p, x) != VV_OK) {
             if (x)
                 vv_volume_free(x->blk);
             free(x);
@@ -445,10 +444,10 @@ missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3])
 }
 
 static int
-box_range(const vv_pyramid *p, int level, const int lo[3], const int hi[3], float *vmin,
+box_range(const vv_pyramid *p, int level, int ch, const int lo[3], const int hi[3], float *vmin,
           float *vmax) {
     const py_level *l = &p->lv[level];
-    if (!l->known)
+    if (!l->known || ch < 0 || ch >= p->n_ch)
         return 0;
     int c0[3], c1[3];
     py_chunk_span(l, lo, hi, c0, c1);
@@ -460,8 +459,9 @@ box_range(const vv_pyramid *p, int level, const int lo[3], const int hi[3], floa
                 const uint64_t L = py_chunk_linear(l, c);
                 if (!l->known[L])
                     return 0;
-                a = l->cmin[L] < a ? l->cmin[L] : a;
-                b = l->cmax[L] > b ? l->cmax[L] : b;
+                const uint64_t at = L * (uint64_t)p->n_ch + (uint64_t)ch;
+                a = l->cmin[at] < a ? l->cmin[at] : a;
+                b = l->cmax[at] > b ? l->cmax[at] : b;
             }
     *vmin = a;
     *vmax = b;
@@ -475,16 +475,38 @@ src_level(void *user, int level) {
 
 static vv_status
 src_read_box(void *user, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    return py_box_read(user, level, lo, hi, out, plan_box_read);
+    return py_box_read(user, level, 0, lo, hi, out, plan_box_read);
+}
+
+static vv_status
+src_read_channels(void *user, int level, const int lo[3], const int hi[3], vv_volume **out) {
+    return py_box_read(user, level, -1, lo, hi, out, plan_box_read);
+}
+
+static int
+src_channel_range(void *user, int channel, int level, const int lo[3], const int hi[3], float *vmin,
+                  float *vmax) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(p->lock);
+    const int r = box_range(p, level, channel, lo, hi, vmin, vmax);
+    pthread_mutex_unlock(p->lock);
+    return r;
 }
 
 static int
 src_box_range(void *user, int level, const int lo[3], const int hi[3], float *vmin, float *vmax) {
-    vv_pyramid *p = user;
-    pthread_mutex_lock(p->lock);
-    const int r = box_range(p, level, lo, hi, vmin, vmax);
-    pthread_mutex_unlock(p->lock);
-    return r;
+    return src_channel_range(user, 0, level, lo, hi, vmin, vmax);
+}
+
+static vv_status
+src_channel_read_box(void *user, int channel, int level, const int lo[3], const int hi[3],
+                     vv_volume **out) {
+    return py_box_read(user, level, channel, lo, hi, out, NULL);
+}
+
+static const vv_volume *
+src_channel_level(void *user, int channel, int level) {
+    return vv_pyramid_channel_level(user, channel, level);
 }
 
 static int
@@ -626,4 +648,11 @@ vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
     out->boxes = p->boxes;
     out->request = src_request;
     out->stalled = src_stalled;
+    out->n_channels = p->n_ch;
+    if (p->n_ch > 1) {
+        out->read_channels = src_read_channels;
+        out->channel_range = src_channel_range;
+        out->channel_level = src_channel_level;
+        out->channel_read_box = src_channel_read_box;
+    }
 }

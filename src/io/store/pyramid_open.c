@@ -39,6 +39,8 @@ vv_pyramid_free(vv_pyramid *p) {
     for (int i = 0; i < p->n_levels; i++) {
         py_level *l = &p->lv[i];
         vv_volume_free(l->hdr);
+        for (int k = 0; k < VV_STORE_MAX_CHANNELS; k++)
+            vv_volume_free(l->chdr[k]);
         free(l->cmin);
         free(l->cmax);
         free(l->known);
@@ -104,16 +106,17 @@ open_level(vv_pyramid *p, int i) {
     for (int k = 0; k < 3; k++)
         n *= (uint64_t)l->nchunks[k];
     l->n_chunks = n;
+    const uint64_t nchan = (uint64_t)p->n_ch;
     if (n <= PY_MAX_LEVEL_CHUNKS) {
-        l->cmin = malloc(sizeof(float) * n);
-        l->cmax = malloc(sizeof(float) * n);
+        l->cmin = malloc(sizeof(float) * n * nchan);
+        l->cmax = malloc(sizeof(float) * n * nchan);
         l->known = calloc(n, 1);
         l->read_frame = calloc(n, sizeof(uint32_t));
         l->frame_reads = calloc(n, sizeof(uint16_t));
         if (!l->cmin || !l->cmax || !l->known || !l->read_frame || !l->frame_reads)
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
         /* ranges the store's index gives before any chunk is read */
-        for (uint64_t L = 0; p->store.chunk_range && L < n; L++) {
+        for (uint64_t L = 0; p->store.chunk_range && p->n_ch == 1 && L < n; L++) {
             const int c[3] = {(int)(L % (uint64_t)l->nchunks[0]),
                               (int)(L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]),
                               (int)(L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]))};
@@ -127,6 +130,16 @@ open_level(vv_pyramid *p, int i) {
     }
     l->hdr = sl->hdr; /* taken */
     sl->hdr = NULL;
+    /* the other channels' headers (their ranges are set once known) */
+    for (int k = 1; k < p->n_ch; k++) {
+        const int one[3] = {1, 1, 1};
+        vv_status s = vv_volume_new(&l->chdr[k], one, l->type);
+        if (s != VV_OK)
+            return s;
+        memcpy(l->chdr[k]->dims, l->hdr->dims, sizeof l->chdr[k]->dims); /* geometry only */
+        vv_volume_take_geometry(l->chdr[k], l->hdr);
+        l->chdr[k]->modification = l->hdr->modification;
+    }
     return VV_OK;
 }
 
@@ -137,14 +150,14 @@ open_level(vv_pyramid *p, int i) {
  * the decoded chunks such a box overlaps at most (any level). */
 static uint64_t
 working_set(const vv_pyramid *p, int cells, uint64_t *chunks) {
-    uint64_t v = 1, worst = 0;
+    uint64_t v = (uint64_t)p->n_ch, worst = 0; /* every channel's box and copies */
     for (int k = 0; k < 3; k++) {
         const int d = p->lv[0].dims[k], box = cells + 5;
         v *= (uint64_t)(d < box ? d : box);
     }
     for (int i = 0; i < p->n_levels; i++) {
         const py_level *l = &p->lv[i];
-        uint64_t c = l->esize;
+        uint64_t c = l->esize * (uint64_t)p->n_ch;
         for (int k = 0; k < 3; k++) {
             const int box = cells + 5, cd = l->cdims[k];
             int n = (box + cd - 1) / cd + 1;
@@ -163,6 +176,10 @@ pyramid_open(vv_pyramid *p, vv_load_info *info) {
     if (p->store.n_levels < 1 || p->store.n_levels > VV_PYRAMID_MAX_LEVELS)
         return vv_error_set(VV_ERR_LIMIT, "%d levels (1 .. %d are read)", p->store.n_levels,
                             VV_PYRAMID_MAX_LEVELS);
+    if (p->store.n_ch < 0 || p->store.n_ch > VV_STORE_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_LIMIT, "%d channels a read (at most %d)", p->store.n_ch,
+                            VV_STORE_MAX_CHANNELS);
+    p->n_ch = p->store.n_ch > 1 ? p->store.n_ch : 1;
     for (int i = 0; i < p->store.n_levels; i++) {
         s = open_level(p, i);
         p->n_levels = i + 1;
@@ -198,27 +215,40 @@ pyramid_open(vv_pyramid *p, vv_load_info *info) {
     p->cl.next_use = py_client_next_use;
     p->cl.drop = py_client_drop;
     vv_cache_client_add(p->cache, &p->cl);
-    /* the range: the store's (an omero window), else the coarsest level's */
-    p->range[0] = 0;
-    p->range[1] = 1;
-    if (p->store.has_range) {
-        p->range[0] = p->store.range[0];
-        p->range[1] = p->store.range[1];
-    } else {
+    /* each channel's range: the store's (an omero window), else the
+     * coarsest level's (its chunks read for all channels at once) */
+    int known = 1;
+    for (int k = 0; k < p->n_ch; k++) {
+        const int has = p->n_ch > 1 ? p->store.ch_has_range[k] : p->store.has_range;
+        const double *r = p->n_ch > 1 ? p->store.ch_range[k] : p->store.range;
+        p->crange[k][0] = has ? r[0] : 0;
+        p->crange[k][1] = has ? r[1] : 1;
+        known &= has;
+    }
+    if (!known) {
         const py_level *c = &p->lv[p->n_levels - 1];
         const int lo[3] = {0, 0, 0}, hi[3] = {c->dims[0] - 1, c->dims[1] - 1, c->dims[2] - 1};
-        vv_volume *v = NULL;
-        if ((s = vv_pyramid_read_box(p, p->n_levels - 1, lo, hi, &v)) != VV_OK)
+        vv_volume *v[VV_STORE_MAX_CHANNELS] = {NULL};
+        if ((s = py_box_read(p, p->n_levels - 1, -1, lo, hi, v, NULL)) != VV_OK)
             return s;
-        vv_volume_update_range(v);
-        p->range[0] = v->range[0];
-        p->range[1] = v->range[1];
-        vv_volume_free(v);
+        for (int k = 0; k < p->n_ch; k++) {
+            const int has = p->n_ch > 1 ? p->store.ch_has_range[k] : p->store.has_range;
+            vv_volume_update_range(v[k]);
+            if (!has) {
+                p->crange[k][0] = v[k]->range[0];
+                p->crange[k][1] = v[k]->range[1];
+            }
+            vv_volume_free(v[k]);
+        }
     }
-    for (int i = 0; i < p->n_levels; i++) {
-        p->lv[i].hdr->range[0] = p->range[0];
-        p->lv[i].hdr->range[1] = p->range[1];
-    }
+    p->range[0] = p->crange[0][0];
+    p->range[1] = p->crange[0][1];
+    for (int i = 0; i < p->n_levels; i++)
+        for (int k = 0; k < p->n_ch; k++) {
+            vv_volume *h = k ? p->lv[i].chdr[k] : p->lv[i].hdr;
+            h->range[0] = p->crange[k][0];
+            h->range[1] = p->crange[k][1];
+        }
     if (info) {
         info->n_channels = p->store.n_channels;
         info->n_times = p->store.n_times;

@@ -159,6 +159,14 @@ void vv_zr_place_unit(const zr_layout *J, const uint64_t idx[ZR_MAX_DIM], unsign
                       int missing, unsigned char *dst, const int dorg[3], const int ddims[3],
                       double *range);
 
+/* vv_zr_place_unit in two steps, for a unit that holds several channels
+ * placed one after another (decoded once): the unit in @p buf made the
+ * host's values in place (the fill value where @p missing), then the
+ * layout's channel and step of it copied (as place_unit copies). */
+void vv_zr_unit_host(const zr_layout *J, unsigned char *buf, int missing);
+void vv_zr_unit_copy(const zr_layout *J, const uint64_t idx[ZR_MAX_DIM], const unsigned char *buf,
+                     unsigned char *dst, const int dorg[3], const int ddims[3], double *range);
+
 /* Where one chunk of vv_zr_copy_chunks goes (its voxels inside the
  * array into dst, an array of dims voxels, i fastest, whose voxel 0 is the
  * level's voxel org) and what it was: missing (absent: the fill value),

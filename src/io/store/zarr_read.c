@@ -31,6 +31,7 @@
  * the root, an offset and a length), the one place a remote byte source
  * will take.
  */
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -222,6 +223,45 @@ prefetch_levels(const zr_array *a, json_t *dsl, int count) {
     free(keys);
 }
 
+/* Python's json (zarr-python, ome-zarr-py) writes a NaN or an infinity in
+ * user attributes (an omero window) as the bare words NaN, Infinity and
+ * -Infinity, which are not JSON and which Jansson refuses: each such word
+ * outside a string becomes "[]" and spaces (the same length, so that
+ * Jansson's line and column still point at the file's text), a value that
+ * is no number, which the readers then ignore or refuse by name. */
+static void
+zr_json_nonfinite(char *b, size_t n) {
+    int in_string = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (in_string) {
+            if (b[i] == '\\')
+                i++;
+            else if (b[i] == '"')
+                in_string = 0;
+            continue;
+        }
+        if (b[i] == '"') {
+            in_string = 1;
+            continue;
+        }
+        size_t len = 0;
+        if (n - i >= 3 && !memcmp(b + i, "NaN", 3))
+            len = 3;
+        else if (n - i >= 8 && !memcmp(b + i, "Infinity", 8))
+            len = 8;
+        else if (n - i >= 9 && !memcmp(b + i, "-Infinity", 9))
+            len = 9;
+        /* a bare word: not the tail of a longer one */
+        if (!len || (i > 0 && (isalnum((unsigned char)b[i - 1]) || b[i - 1] == '_')) ||
+            (i + len < n && (isalnum((unsigned char)b[i + len]) || b[i + len] == '_')))
+            continue;
+        b[i] = '[';
+        b[i + 1] = ']';
+        memset(b + i + 2, ' ', len - 2);
+        i += len - 1;
+    }
+}
+
 /* The object @p key of the store loaded as JSON (at most ZR_JSON_MAX
  * bytes); NULL with the error set (naming @p name), or NULL without an
  * error when the object is absent and @p optional. */
@@ -251,6 +291,7 @@ load_json(const zr_array *a, const char *key, const char *name, int optional, vv
     if (*s != VV_OK || missing)
         return NULL;
     json_error_t e;
+    zr_json_nonfinite((char *)b, n);
     json_t *j = json_loadb((const char *)b, n, JSON_REJECT_DUPLICATES, &e);
     free(b);
     if (!j)
@@ -483,6 +524,90 @@ root_metadata(const zr_array *a, json_t **za, const char **md) {
     return s;
 }
 
+/* Appends @p what to @p info's warning (one line, "; " between). */
+static void
+add_warning(vv_load_info *info, const char *what) {
+    if (!info)
+        return;
+    const size_t n = strlen(info->warning);
+    snprintf(info->warning + n, sizeof info->warning - n, "%s%s", n ? "; " : "", what);
+}
+
+/* The least and greatest value voxels of @p a's type hold (floats: +-1e38). */
+static void
+type_limits(const zr_array *a, double *lo, double *hi) {
+    switch (a->type) {
+    case VV_U8:
+        *lo = 0, *hi = 255;
+        break;
+    case VV_I8:
+        *lo = -128, *hi = 127;
+        break;
+    case VV_U16:
+        *lo = 0, *hi = 65535;
+        break;
+    case VV_I16:
+        *lo = -32768, *hi = 32767;
+        break;
+    case VV_U32:
+        *lo = 0, *hi = 4294967295.0;
+        break;
+    case VV_I32:
+        *lo = -2147483648.0, *hi = 2147483647.0;
+        break;
+    default:
+        *lo = -1e38, *hi = 1e38;
+    }
+    if (a->conv64 == 1)
+        *lo = -9.3e18, *hi = 9.3e18;
+    else if (a->conv64 == 2)
+        *lo = 0, *hi = 1.85e19;
+}
+
+/* Channel @p channel's omero window @p w (may be NULL): min and max into
+ * a->has_window, a->window (the data range); start and end into
+ * info->has_window, info->window (the contrast). A pair that is not two
+ * finite numbers, inverted, or beyond what the voxel type holds (by more
+ * than its own span) is ignored, said in info->warning. */
+static void
+zr_omero_window(zr_array *a, json_t *w, int channel, const char *md, vv_load_info *info) {
+    a->has_window = 0;
+    if (!json_is_object(w))
+        return;
+    double tlo, thi;
+    type_limits(a, &tlo, &thi);
+    static const char *const keys[2][2] = {{"min", "max"}, {"start", "end"}};
+    for (int pair = 0; pair < 2; pair++) {
+        json_t *x = json_object_get(w, keys[pair][0]), *y = json_object_get(w, keys[pair][1]);
+        if (!x && !y)
+            continue;
+        const double lo = json_number_value(x), hi = json_number_value(y);
+        const double slack = thi - tlo;
+        const char *why = !json_is_number(x) || !json_is_number(y) || !isfinite(lo) || !isfinite(hi)
+                              ? "not two finite numbers"
+                          : hi < lo || (pair == 1 && hi == lo) ? "inverted"
+                          : lo < tlo - slack || hi > thi + slack
+                              ? "beyond what the voxel type holds"
+                              : NULL;
+        if (why) {
+            char msg[200];
+            snprintf(msg, sizeof msg, "%s: omero channel %d's window %s/%s is %s: ignored", md,
+                     channel, keys[pair][0], keys[pair][1], why);
+            add_warning(info, msg);
+            continue;
+        }
+        if (pair == 0) {
+            a->has_window = 1;
+            a->window[0] = lo;
+            a->window[1] = hi;
+        } else if (info) {
+            info->has_window = 1;
+            info->window[0] = lo;
+            info->window[1] = hi;
+        }
+    }
+}
+
 /* The OME metadata of the store at @p root (its .zattrs, or zarr.json):
  * level @p level's folder, axes, transforms; the channel's name, colour
  * and window into @p info and @p a. Every dataset's path is checked, not
@@ -630,22 +755,18 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         const char *col = json_string_value(json_object_get(ch, "color"));
         char *end = NULL;
         unsigned long rgb = col && strlen(col) == 6 ? strtoul(col, &end, 16) : 0;
+        info->inactive = json_is_false(json_object_get(ch, "active"));
         if (end && *end == '\0' && rgb != 0) {
             for (int k = 0; k < 3; k++)
                 info->color[k] = (float)((rgb >> (16 - 8 * k)) & 0xffu) / 255.0f;
             info->has_color = 1;
         }
     }
-    /* the omero window's min and max (the contrast) */
-    json_t *w = json_object_get(ch, "window");
-    json_t *mn = json_object_get(w, "min"), *mx = json_object_get(w, "max");
-    a->has_window = json_is_number(mn) && json_is_number(mx) &&
-                    json_number_value(mx) >= json_number_value(mn) &&
-                    isfinite(json_number_value(mn)) && isfinite(json_number_value(mx));
-    if (a->has_window) {
-        a->window[0] = json_number_value(mn);
-        a->window[1] = json_number_value(mx);
-    }
+    /* the omero window: its min and max (the data's range), its start and
+     * end (the contrast limits); either pair NaN, inverted or absurd is
+     * ignored with a warning */
+    if (s == VV_OK)
+        zr_omero_window(a, json_object_get(ch, "window"), channel < 0 ? 0 : channel, md, info);
     json_decref(za);
     if (s != VV_OK)
         vv_zr_array_release(a);
@@ -927,6 +1048,12 @@ void
 vv_zr_place_unit(const zr_layout *J, const uint64_t idx[ZR_MAX_DIM], unsigned char *buf,
                  int missing, unsigned char *dst, const int dorg[3], const int ddims[3],
                  double *range) {
+    vv_zr_unit_host(J, buf, missing);
+    vv_zr_unit_copy(J, idx, buf, dst, dorg, ddims, range);
+}
+
+void
+vv_zr_unit_host(const zr_layout *J, unsigned char *buf, int missing) {
     const zr_array *a = J->a;
     const size_t vs = a->esize;
     if (missing)
@@ -940,6 +1067,13 @@ vv_zr_place_unit(const zr_layout *J, const uint64_t idx[ZR_MAX_DIM], unsigned ch
             const double x = a->conv64 == 1 ? (double)(int64_t)u : (double)u;
             memcpy(buf + 8 * i, &x, 8);
         }
+}
+
+void
+vv_zr_unit_copy(const zr_layout *J, const uint64_t idx[ZR_MAX_DIM], const unsigned char *buf,
+                unsigned char *dst, const int dorg[3], const int ddims[3], double *range) {
+    const zr_array *a = J->a;
+    const size_t vs = a->esize;
     /* the part inside the array, at the asked channel and step */
     uint64_t base = 0;
     if (J->cax >= 0)

@@ -1264,4 +1264,5 @@ const vv_format_record vv_format_ome_zarr = {
     .write = zarr_write_record,
     .write_boxes = zarr_write_boxes_record,
     .open_store = vv_zr_pyramid_store,
+    .open_store_channels = vv_zr_pyramid_store_channels,
 };

@@ -631,10 +631,11 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                                     "object '%s' shows %d channels; the gpu renderer draws up to "
                                     "%d (raycast draws %d)",
                                     obj->name, shown, GPU_MAX_CH, VV_MAX_CHANNELS);
-            if (rg)
+            if (rg && obj->blend != VV_BLEND_COMPOSITE)
                 return vv_error_set(VV_ERR_UNSUPPORTED,
-                                    "object '%s': the gpu renderer draws channels in memory, "
-                                    "not by regions (raycast does)",
+                                    "object '%s': by regions, the gpu renderer draws channels "
+                                    "under the composite rule (the drivers draw the others a "
+                                    "channel at a time)",
                                     obj->name);
             for (int k = 0; k < obj->n_channels; k++)
                 if (obj->channels[k].visible && obj->channels[k].volume)

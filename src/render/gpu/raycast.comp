@@ -421,7 +421,11 @@ main() {
             const bool additive = blend == BLEND_ADDITIVE;
             const float et = fr.p0.y;
             float k = ceil(t0 * inv_dt);
-            const float kend = floor(t1 * inv_dt);
+            float kend = floor(t1 * inv_dt);
+            if (region) { /* the composite rule by regions: the region's samples */
+                k = max(k, ceil(ra * inv_dt));
+                kend = min(kend, floor(rb * inv_dt));
+            }
             int live = additive ? nch : 1;
             while (k <= kend && live > 0) {
                 const float t = k * dt;
@@ -437,6 +441,8 @@ main() {
                     continue;
                 }
                 k += 1.0;
+                if (!owned(t))
+                    continue;
                 float T = 1.0, sum_a = 0.0;
                 vec3 col = vec3(0);
                 for (int ch = 0; ch < nch; ch++) {

@@ -974,10 +974,12 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
  * own, chobj[k] (the object with the channel's volume and transfer
  * function, one channel, no 2-D TF or texture; composite mode for the
  * composite and additive rules, MIP for the maximum rule) into ch[k]; the
- * slot ro set up as the first of them (rays, the skipping grid's layout). */
+ * slot ro set up as the first of them (rays, the skipping grid's layout).
+ * With @p region (the composite rule by regions) each channel's volume is
+ * its voxels of the region, sampled as a one-channel region's are. */
 static vv_status
 prepare_channels(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w, rc_obj *ch,
-                 vv_object *chobj) {
+                 vv_object *chobj, const vv_render_region *region) {
     int n = 0;
     for (int c = 0; c < obj->n_channels; c++) {
         const vv_channel *cc = &obj->channels[c];
@@ -985,12 +987,12 @@ prepare_channels(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world 
             continue;
         vv_object *o = &chobj[n];
         vv_vchannel_object(obj, cc, o);
-        vv_status s = prepare_object(fr, &ch[n], o, w, NULL);
+        vv_status s = prepare_object(fr, &ch[n], o, w, region);
         if (s != VV_OK)
             return vv_error_prefix(s, "channel %d ('%s')", c, cc->name);
         n++;
     }
-    vv_status s = prepare_object(fr, ro, &chobj[0], w, NULL);
+    vv_status s = prepare_object(fr, ro, &chobj[0], w, region);
     if (s != VV_OK)
         return s;
     ro->obj = obj;
@@ -1252,7 +1254,7 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                 s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", ob->name);
             else if (multi)
                 s = prepare_channels(&fr, &objs[fr.n_obj++], ob, w, chans + n_chans,
-                                     chobj + n_chans);
+                                     chobj + n_chans, region);
             else
                 s = prepare_object(&fr, &objs[fr.n_obj++], ob, w, region);
             if (s == VV_OK) {
@@ -1274,8 +1276,12 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
         if (objs[i].mode == VV_MODE_ATTENUATED_MIP && !objs[i].nch &&
             (s = vv_vatten_prepare(&objs[i].att, objs[i].obj, objs[i].c, fr.dt)) != VV_OK)
             break;
-        if (objs[i].nch)
-            continue; /* its channels have the tables */
+        if (objs[i].nch) {
+            /* its channels have the tables; trace_channels finds its
+             * first sample as ceil(t0 * (1 / dt)) (a region's clip too) */
+            objs[i].inv_form = 1;
+            continue;
+        }
         s = prepare_tables(&fr, &objs[i]);
         objs[i].inv_form =
             fr.n_comp == 1 && objs[i].mode == VV_MODE_COMPOSITE && !objs[i].extras && !objs[i].nch;

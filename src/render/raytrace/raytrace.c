@@ -515,9 +515,11 @@ count_objects(const vv_world *w, int *nv, int *ng, int *nch) {
  * volume of its own (the ray caster's rules: the object with the channel's
  * volume and transfer function, one channel, no 2-D TF or texture;
  * composite mode under the composite and additive rules, MIP under the
- * maximum rule), in consecutive vobjs with the first as their leader. */
+ * maximum rule), in consecutive vobjs with the first as their leader.
+ * @p region: the region part's channels (their volumes its voxels), each
+ * sampling the region's samples as a one-channel part does. */
 static vv_status
-prepare_channels(rt_frame *fr, const vv_object *obj, int context) {
+prepare_channels(rt_frame *fr, const vv_object *obj, int context, const vv_render_region *region) {
     const int first = fr->n_vobj;
     for (int c = 0; c < obj->n_channels; c++) {
         const vv_channel *cc = &obj->channels[c];
@@ -533,6 +535,11 @@ prepare_channels(rt_frame *fr, const vv_object *obj, int context) {
         ro->group = first;
         ro->blend = obj->blend;
         ro->lead = &fr->vobjs[first];
+        if (region) {
+            ro->region = region;
+            for (int a = 0; a < 3; a++)
+                ro->dims[a] = region->dims[a] > 1 ? region->dims[a] : 2;
+        }
     }
     fr->vobjs[first].gn = fr->n_vobj - first;
     return VV_OK;
@@ -550,7 +557,8 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
     vv_status s = count_objects(w, &nv, &ng, &nch);
     if (s != VV_OK)
         return s;
-    nv += region != NULL;
+    nv += region == NULL ? 0 : part->n_channels > 1 ? vv_vchannels_shown(part) : 1;
+    nch += region && part->n_channels > 1 ? vv_vchannels_shown(part) : 0;
     fr->vobjs = calloc(nv ? (size_t)nv : 1, sizeof *fr->vobjs);
     fr->gobjs = calloc(ng ? (size_t)ng : 1, sizeof *fr->gobjs);
     fr->chobjs = calloc(nch ? (size_t)nch : 1, sizeof *fr->chobjs);
@@ -558,7 +566,11 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     double dt = INFINITY;
     vv_box bounds = vv_world_bounds(w);
-    if (region) {
+    if (region && part->n_channels > 1) {
+        /* the region part's channels first (the composite rule) */
+        s = prepare_channels(fr, part, 0, region);
+        dt = vv_vobject_step(part);
+    } else if (region) {
         /* the region part first: the samples of the whole volume that the
          * region owns, from its voxels */
         rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
@@ -582,7 +594,7 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
             if (o->n_channels > 1 && !vv_vchannels_shown(o))
                 continue;
             if (o->n_channels > 1) {
-                s = prepare_channels(fr, o, region != NULL);
+                s = prepare_channels(fr, o, region != NULL, NULL);
             } else {
                 rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
                 s = prepare_volume(fr, ro, o);
@@ -746,9 +758,22 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
                  const vv_render_region *region, const vv_render_options *opt,
                  vv_region_image *out) {
     vv_object part;
-    vv_status s = vv_render_region_part(w, region, &out->op, &part);
+    vv_channel *chan = NULL;
+    vv_status s = vv_render_region_part(w, region, &out->op, &part, &chan);
     if (s != VV_OK)
         return s;
+    if (part.n_channels > 1) { /* the composite rule: over, as a composite part */
+        rt_state *st = state;
+        s = render_frame(st, w, view, opt, region, &part, out->image, NULL);
+        free(chan);
+        out->classify = NULL;
+        out->classify_ctx = NULL;
+        const int ss = opt->quality >= 2 && st->samples > 1 && !region->rays &&
+                       vv_frame_refine_for(&st->refine, opt->quality, 0, 0, &(float){0}) == 0;
+        out->supersample = ss ? rt_region_supersample : NULL;
+        out->supersample_ctx = ss ? st : NULL;
+        return s;
+    }
     /* an isosurface shadowed by a coarse proxy's surface shows the proxy's
      * steps as shadow bands: iso regions only with the whole volume as the
      * context (distributed rendering of a volume every rank holds) */

@@ -45,27 +45,11 @@
 #include "render/raytrace/rt_internal.h"
 #include "render/sample.h"
 
-int
-rt_context_whole(rt_frame *fr, const vv_render_region *region) {
-    if (!region || !region->whole || !region->whole->read_box || !fr->shadows ||
-        !fr->st->light_volumes || fr->st->shadow_grid == 2 || fr->n_vobj < 1)
-        return 0;
-    for (int l = 0; l < fr->n_lights; l++)
-        if (fr->lights[l].point &&
-            !(isfinite(fr->lights[l].pos[0]) && isfinite(fr->lights[l].pos[1]) &&
-              isfinite(fr->lights[l].pos[2])))
-            return 0;
-    const rt_vobj *part = &fr->vobjs[0]; /* prepare_frame: the region part first */
-    const vv_volume *h = region->whole->header;
-    if (!part->region || part->mode != VV_MODE_COMPOSITE || part->group >= 0 || !h)
-        return 0;
-    for (int a = 0; a < 3; a++)
-        if (h->dims[a] != region->dims[a] || h->dims[a] < 2)
-            return 0;
-    /* the light volumes (4 bytes every RT_LGRID^3 voxels a light) are held
-     * whole: past half the memory available, the proxy's (counting those
-     * the frame's earlier regions already keep, so that every region of a
-     * frame decides alike) */
+/* 1 when light volumes of @p n_vol volumes of @p h's dims fit in half the
+ * memory available (counting those the frame's earlier regions already
+ * keep, so that every region of a frame decides alike). */
+static int
+light_volumes_fit(const rt_frame *fr, const vv_volume *h, int n_vol) {
     uint64_t points = 1;
     for (int a = 0; a < 3; a++)
         points *= (uint64_t)((h->dims[a] - 1 + RT_LGRID - 1) / RT_LGRID + 1);
@@ -74,7 +58,78 @@ rt_context_whole(rt_frame *fr, const vv_render_region *region) {
     for (int i = 0; i < RT_LV_CACHE && avail < UINT64_MAX - one; i++)
         if (fr->st->lv[i].vol && fr->st->lv[i].whole == h)
             avail += one;
-    if (one * (uint64_t)fr->n_lights > avail / 2)
+    return one * (uint64_t)fr->n_lights * (uint64_t)n_vol <= avail / 2;
+}
+
+/* rt_context_whole of a multi-channel region part (the composite rule):
+ * the k-th channel of the World's object (a context) casts its shadows
+ * through its channel's whole volume (region->channel_whole), classified
+ * by the part's k-th channel. */
+static int
+context_whole_channels(rt_frame *fr, const vv_render_region *region) {
+    const rt_vobj *p0 = &fr->vobjs[0];
+    const vv_object *obj = fr->w->objects[region->object];
+    int drawn[VV_MAX_CHANNELS], n = 0;
+    for (int k = 0; k < obj->n_channels && n < VV_MAX_CHANNELS; k++)
+        if (obj->channels[k].visible && obj->channels[k].volume)
+            drawn[n++] = k;
+    if (n != p0->gn || n < 1)
+        return 0;
+    for (int k = 0; k < n; k++) {
+        const vv_volume *h = region->channel_whole[drawn[k]].header;
+        if (!h || !region->channel_whole[drawn[k]].read_box)
+            return 0;
+        for (int a = 0; a < 3; a++)
+            if (h->dims[a] != region->dims[a] || h->dims[a] < 2)
+                return 0;
+    }
+    if (!light_volumes_fit(fr, region->channel_whole[drawn[0]].header, n))
+        return 0;
+    int any = 0, k = 0;
+    for (int i = n; i < fr->n_vobj && k < n; i++) {
+        rt_vobj *ro = &fr->vobjs[i];
+        if (!ro->context || ro->group < 0)
+            continue;
+        const rt_vobj *part = &fr->vobjs[k];
+        const vv_region_volume *wv = &region->channel_whole[drawn[k++]];
+        if (ro->mode != VV_MODE_COMPOSITE || !ro->obj->casts_shadows ||
+            part->mode != VV_MODE_COMPOSITE)
+            continue;
+        memcpy(ro->w2i, part->w2i, sizeof ro->w2i);
+        memcpy(ro->i2w, part->i2w, sizeof ro->i2w);
+        memcpy(ro->dims, part->dims, sizeof ro->dims);
+        ro->vox = part->vox;
+        ro->whole = wv;
+        ro->whole_part = part;
+        any = 1;
+    }
+    return any;
+}
+
+int
+rt_context_whole(rt_frame *fr, const vv_render_region *region) {
+    if (!region || !fr->shadows || !fr->st->light_volumes || fr->st->shadow_grid == 2 ||
+        fr->n_vobj < 1)
+        return 0;
+    for (int l = 0; l < fr->n_lights; l++)
+        if (fr->lights[l].point &&
+            !(isfinite(fr->lights[l].pos[0]) && isfinite(fr->lights[l].pos[1]) &&
+              isfinite(fr->lights[l].pos[2])))
+            return 0;
+    if (region->channel_whole && fr->vobjs[0].region && fr->vobjs[0].group >= 0)
+        return context_whole_channels(fr, region);
+    if (!region->whole || !region->whole->read_box)
+        return 0;
+    const rt_vobj *part = &fr->vobjs[0]; /* prepare_frame: the region part first */
+    const vv_volume *h = region->whole->header;
+    if (!part->region || part->mode != VV_MODE_COMPOSITE || part->group >= 0 || !h)
+        return 0;
+    for (int a = 0; a < 3; a++)
+        if (h->dims[a] != region->dims[a] || h->dims[a] < 2)
+            return 0;
+    /* the light volumes (4 bytes every RT_LGRID^3 voxels a light) are held
+     * whole: past half the memory available, the proxy's */
+    if (!light_volumes_fit(fr, h, 1))
         return 0;
     int any = 0;
     for (int i = 1; i < fr->n_vobj; i++) {
