@@ -1194,6 +1194,41 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
     return VV_OK;
 }
 
+/* Every level of the store at @p path but @p level (whose array is @p a)
+ * chunked along its channel axis as @p a is: a pyramid read out of core
+ * holds every channel of a node in one piece, so a store that chunks its
+ * channels differently at two levels is inconsistent multiscales, refused
+ * in memory as out of core (zarr_pyramid.c). */
+static vv_status
+check_channel_chunks(const char *path, int level, const zr_array *a, int n_levels) {
+    int cax = -1;
+    for (int i = 0; i < a->ndim; i++)
+        if (a->axes[i].kind == 1)
+            cax = i;
+    if (cax < 0 || n_levels < 2)
+        return VV_OK;
+    zr_array *b = calloc(1, sizeof *b);
+    if (!b)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    vv_status s = VV_OK;
+    for (int i = 0; i < n_levels && s == VV_OK; i++) {
+        if (i == level)
+            continue;
+        memset(b, 0, sizeof *b);
+        if ((s = vv_zr_parse_store(path, i, b, -1, NULL, NULL)) != VV_OK)
+            break;
+        if (b->ndim == a->ndim && b->axes[cax].kind == 1 && b->chunks[cax] != a->chunks[cax])
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "level %d: chunks of %llu along the channel axis, level %d's of %llu "
+                             "(inconsistent multiscales)",
+                             i, (unsigned long long)b->chunks[cax], level,
+                             (unsigned long long)a->chunks[cax]);
+        vv_zr_array_release(b);
+    }
+    free(b);
+    return s;
+}
+
 static vv_status
 read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     zr_array *a = calloc(1, sizeof *a); /* 14 KiB: not on a reader thread's stack */
@@ -1201,6 +1236,8 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     int n_levels = 1;
     vv_status s = vv_zr_parse_store(path, opt->level, a, opt->channel, opt->info, &n_levels);
+    if (s == VV_OK)
+        s = check_channel_chunks(path, opt->level, a, n_levels);
     if (s == VV_OK)
         s = read_array(out, a, opt, n_levels);
     vv_zr_array_release(a);
