@@ -1030,7 +1030,11 @@ class World:
         colors a list of (r, g, b) in [0, 1], contrast a list of (lo, hi)
         data values, blend "composite", "additive" or "maximum", for them
         (a scene, or more colours than the file has channels, raises
-        InvalidError).
+        InvalidError). Without channel, channels, mode, tf, iso or labels a
+        file of several channels shows them all (its active ones visible, in
+        their colours, with the contrast of their omero windows, else of
+        the coarsest level), in memory or out of core alike: a pyramid out
+        of core reads every channel of a node at once.
 
         Overrides of the guessed appearance: mode ("composite", "mip",
         "minip", "xray", "iso", "attenuated-mip"), tf (lo, hi) the transfer function's data
@@ -1101,6 +1105,9 @@ class World:
             keep.append(ffi.new("char[]", cstr(field)))
             o.field = keep[-1]
         _open_channels(o, channels, colors, contrast, blend)
+        if channels is None and channel is None and mode is None and tf is None and \
+                iso is None and not labels:
+            o.all_channels = 1  # a file of several channels: all of them, in their colours
         if mode is not None:
             o.has_mode = 1
             o.view.mode = mode_code(mode)

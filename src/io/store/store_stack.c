@@ -16,14 +16,14 @@
 
 typedef struct stk_store {
     int n;
+    size_t esize[VV_STORE_MAX_LEVELS]; /* bytes a voxel of each level */
     vv_store part[VV_STORE_MAX_CHANNELS];
 } stk_store;
 
 /* Bytes of one channel's block of @p dims voxels of level @p level. */
 static size_t
 block_bytes(const stk_store *k, int level, const int dims[3]) {
-    return (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2] *
-           vv_voxel_type_size(k->part[0].lv[level].hdr->type);
+    return (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2] * k->esize[level];
 }
 
 static vv_status
@@ -130,6 +130,7 @@ vv_store_stack(vv_store *out, vv_store *parts, int n) {
     }
     /* the levels' headers are channel 0's (taken); the others' go with their parts */
     for (int l = 0; l < out->n_levels; l++) {
+        k->esize[l] = vv_voxel_type_size(parts[0].lv[l].hdr->type);
         out->lv[l] = parts[0].lv[l];
         parts[0].lv[l].hdr = NULL;
     }

@@ -1,0 +1,247 @@
+#!/usr/bin/env python3
+"""Issue 89's speed targets (docs/rendering.md, "Channels out of core"): a 3-channel
+1024 x 1024 x 512 u16 OME-NGFF 0.5 pyramid (3 GiB at level 0; chunks of one channel x 64^3
+in shards of 256^3, zstd; levels down to 64 voxels a side; written by zarr-python 3),
+drawn by level of detail under --memory-limit 512M at 1000x800, in one run:
+
+- the first progressive image (what the GUI, the browser view and a notebook show first):
+  `volvis.World.open(STORE, memory_limit="512M", lod=True)` (every channel) and the first
+  `volvis.render(w, progressive=True)`, in a process of its own (goal <= 1 s);
+- the converged 3-channel frame against its three channels drawn one after another (what
+  a user did before: `volvis render STORE --channel C --memory-limit 512M` three times),
+  processes of their own, alternated, medians (goal <= 0.7x);
+- the frame drawn again with its chunks in the cache (`--repeat 2 --stats`): the 3-channel
+  second frame against one channel's second frame (goal <= 1.6x: one pass, not three);
+- bytes read against the distinct chunks the frame needs: the store served by nginx on
+  loopback, rendered by URL, nginx's access log (every response body) against the bytes
+  of the distinct chunk ranges asked (goal <= 1.2x).
+
+    .venv/bin/python bench/channels_ooc.py [--repeat 3] [--out build/bench-out/channels_ooc]
+        [--build build/release] [--make-only]
+
+The store is made once and kept in OUT/www (about 1 GB on disk). Prints anchor lines and
+one summary line per target with its goal.
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tests", "io"))
+from http_common import start_nginx, stop_server  # noqa: E402
+
+NX, NY, NZ, NC = 1024, 1024, 512, 3
+SIZE = "1000x800"
+LIMIT = "512M"
+
+# The first progressive image, in a process of its own: STORE.
+PROGRESSIVE = r"""
+import json, sys, time
+import volvis
+store = sys.argv[1]
+t0 = time.perf_counter()
+w = volvis.World.open(store, memory_limit="512M", lod=True, size=(1000, 800))
+t_open = time.perf_counter() - t0
+img, info = volvis.render(w, progressive=True, return_lod=True)
+t_first = time.perf_counter() - t0
+print(json.dumps({"open": t_open, "first": t_first, "channels": w.opened["n_channels"],
+                  "pending": info["pending"]}))
+"""
+
+
+def field(rng, shape):
+    """A smooth random field (fluorescent structures) on the coarse grid SHAPE, in [0, 1]."""
+    from scipy import ndimage
+    f = ndimage.gaussian_filter(rng.random(shape, dtype=np.float32), 1.5)
+    f -= f.min()
+    return f / f.max()
+
+
+def make(www):
+    """The store (kept when OUT/www/c3.ome.zarr/.made exists): each channel a coarse random
+    field upsampled 8-fold (structures of 10 to 30 voxels), its brightest tenth bright, a
+    dim noisy background, written a slab of 64 slices at a time; levels of 2x2x2 means."""
+    import zarr
+    from scipy import ndimage
+    from zarr.codecs import ZstdCodec
+    store = os.path.join(www, "c3.ome.zarr")
+    if os.path.exists(os.path.join(store, ".made")):
+        return store
+    shutil.rmtree(store, ignore_errors=True)
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(89)
+    coarse = [field(rng, (NZ // 8, NY // 8, NX // 8)) for _ in range(NC)]
+    g = zarr.open_group(store, mode="w")
+    levels, shape = [], (NC, NZ, NY, NX)
+    while True:
+        levels.append(shape)
+        if max(shape[1:]) <= 64:
+            break
+        shape = (NC,) + tuple(max(1, s // 2) for s in shape[1:])
+    arrays = [g.create_array(str(k), shape=s, dtype=np.uint16, chunks=(1, 64, 64, 64),
+                             shards=(1, 256, 256, 256), compressors=ZstdCodec(level=1))
+              for k, s in enumerate(levels)]
+    slab = 64
+    for z0 in range(0, NZ, slab):
+        block = np.empty((NC, slab, NY, NX), np.uint16)
+        for c in range(NC):
+            part = ndimage.zoom(coarse[c][z0 // 8:(z0 + slab) // 8 + 1], 8, order=1)[:slab]
+            v = np.where(part > 0.62, 400 + 3000 * (part - 0.62) / 0.38, 100 + 40 * part)
+            block[c] = (v + rng.integers(0, 24, size=v.shape)).astype(np.uint16)
+        arrays[0][:, z0:z0 + slab] = block
+        lv = block
+        for k in range(1, len(levels)):
+            s = [d // 2 * 2 for d in lv.shape[1:]]
+            lv = np.rint(lv[:, :s[0], :s[1], :s[2]].astype(np.float32).reshape(
+                NC, s[0] // 2, 2, s[1] // 2, 2, s[2] // 2, 2).mean(axis=(2, 4, 6))).astype(
+                np.uint16)
+            z = z0 >> k
+            arrays[k][:, z:z + lv.shape[1]] = lv
+        print("# made slices %d..%d" % (z0, z0 + slab - 1), flush=True)
+    ds = [{"path": str(k), "coordinateTransformations": [
+        {"type": "scale", "scale": [1.0] + [0.5 * 2 ** k] * 3},
+        {"type": "translation", "translation": [0.0] + [0.5 * (2 ** k - 1) / 2] * 3}]}
+        for k in range(len(levels))]
+    colors = ["FF00FF", "00FF00", "00FFFF"]
+    g.attrs["ome"] = {"version": "0.5", "multiscales": [{"axes": [
+        {"name": "c", "type": "channel"}] + [
+        {"name": a, "type": "space", "unit": "micrometer"} for a in "zyx"], "datasets": ds}],
+        "omero": {"channels": [{"label": "ch%d" % c, "color": colors[c], "active": True,
+                                "window": {"min": 0, "max": 3600, "start": 300, "end": 3000}}
+                               for c in range(NC)]}}
+    size = sum(os.path.getsize(os.path.join(d, f)) for d, _, fs in os.walk(store) for f in fs)
+    print("# made %s in %.0f s, %.2f GB on disk" % (store, time.perf_counter() - t0, size / 1e9),
+          flush=True)
+    open(os.path.join(store, ".made"), "w").write("made\n")
+    return store
+
+
+def render(volvis, store, *args):
+    """One `volvis render` process: (wall seconds, its stdout)."""
+    t0 = time.perf_counter()
+    p = subprocess.run([volvis, "render", store, "--size", SIZE, "--memory-limit", LIMIT, *args],
+                       capture_output=True, text=True)
+    t = time.perf_counter() - t0
+    if p.returncode != 0:
+        sys.exit("channels_ooc: render %s failed: %s" % (" ".join(args), p.stderr.strip()))
+    return t, p.stdout
+
+
+def frame_ms(text):
+    """The ms= of each --stats line."""
+    return [float(x) for x in re.findall(r"\bms=([0-9.]+)", text)]
+
+
+def access_bytes(log):
+    """(bytes of every response body, bytes of the distinct chunk ranges) of nginx's log."""
+    total, distinct = 0, {}
+    pat = re.compile(r'^(\d+) GET "([^"]*)" "([^"]*)" (\d+)')
+    with open(log) as f:
+        for line in f:
+            m = pat.match(line)
+            if not m:
+                continue
+            status, uri, rng, n = int(m.group(1)), m.group(2), m.group(3), int(m.group(4))
+            total += n
+            if status in (200, 206) and not uri.endswith("zarr.json") and \
+                    not rng.startswith("bytes=-"):
+                distinct[(uri, rng)] = n
+    return total, sum(distinct.values())
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--out", default="build/bench-out/channels_ooc")
+    ap.add_argument("--build", default="build/release")
+    ap.add_argument("--make-only", action="store_true")
+    a = ap.parse_args()
+    out, build = os.path.abspath(a.out), os.path.abspath(a.build)
+    www = os.path.join(out, "www")
+    os.makedirs(www, exist_ok=True)
+    store = make(www)
+    if a.make_only:
+        return
+    volvis = os.path.join(build, "volvis")
+    png = os.path.join(out, "frame.png")
+    print("# %s load: %s; %s, %s, --memory-limit %s" % (
+        time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        " ".join(open("/proc/loadavg").read().split()[:3]), store, SIZE, LIMIT), flush=True)
+    # ---- the first progressive image
+    env = dict(os.environ, PYTHONPATH=os.path.join(build, "python"))
+    firsts, opens = [], []
+    for _ in range(a.repeat):
+        r = subprocess.run([sys.executable, "-c", PROGRESSIVE, store], env=env,
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            sys.exit("channels_ooc: the progressive render failed: " + r.stderr.strip())
+        res = json.loads(r.stdout.splitlines()[-1])
+        if res["channels"] != NC:
+            sys.exit("channels_ooc: World.open saw %s channels" % res["channels"])
+        firsts.append(res["first"])
+        opens.append(res["open"])
+    # ---- the converged frame: 3 channels at once against 3 one at a time, alternated
+    render(volvis, store, "-o", png, "-q")  # warm: the files in the page cache
+    all3, one_by_one, second3, second1 = [], [], [], []
+    for _ in range(a.repeat):
+        t, text = render(volvis, store, "-o", png, "-q", "--repeat", "2", "--stats")
+        ms = frame_ms(text)
+        all3.append(ms[0] / 1e3)
+        second3.append(ms[1])
+        tt = 0.0
+        for c in range(NC):
+            t, text = render(volvis, store, "-o", os.path.join(out, "c%d.png" % c), "-q",
+                             "--channel", str(c), "--repeat", "2", "--stats")
+            ms = frame_ms(text)
+            tt += ms[0] / 1e3
+            if c == 0:
+                second1.append(ms[1])
+        one_by_one.append(tt)
+    t3, t1x3 = statistics.median(all3), statistics.median(one_by_one)
+    s3, s1 = statistics.median(second3), statistics.median(second1)
+    _, text = render(volvis, store, "-o", png)
+    line = text.strip().splitlines()[-1] if text.strip() else ""
+    # ---- bytes: the store by URL from nginx on loopback
+    log = os.path.join(out, "access.log")
+    nginx, port, _ = start_nginx(out, www, "channels_ooc", access_log=log)
+    try:
+        open(log, "w").close()
+        url = "http://127.0.0.1:%d/c3.ome.zarr" % port
+        renv = {k: v for k, v in os.environ.items() if not k.lower().endswith("_proxy")}
+        p = subprocess.run([volvis, "render", url, "-o", os.path.join(out, "url.png"), "-q",
+                            "--size", SIZE, "--memory-limit", LIMIT], env=renv,
+                           capture_output=True, text=True)
+        if p.returncode != 0:
+            sys.exit("channels_ooc: the render by URL failed: " + p.stderr.strip())
+        time.sleep(0.5)  # nginx's log written
+        fetched, needed = access_bytes(log)
+    finally:
+        stop_server(nginx)
+    ds = "c3_1024x1024x512_u16"
+    print("anchor=volvis op=channels_ooc_first_image dataset=%s value=%.3f unit=s"
+          % (ds, statistics.median(firsts)))
+    print("anchor=volvis op=channels_ooc_frame dataset=%s value=%.3f unit=s" % (ds, t3))
+    print("anchor=volvis op=channels_ooc_one_by_one dataset=%s value=%.3f unit=s" % (ds, t1x3))
+    print("anchor=volvis op=channels_ooc_second_frame dataset=%s value=%.1f unit=ms" % (ds, s3))
+    print("anchor=volvis op=channels_ooc_one_second_frame dataset=%s value=%.1f unit=ms"
+          % (ds, s1))
+    print("# %s" % line)
+    print("# first progressive image %.2f s (open %.2f s; goal <= 1 s); converged 3-channel "
+          "frame %.2f s against its channels one after another %.2f s: %.2fx (goal <= 0.7x); "
+          "drawn again %.0f ms against one channel's %.0f ms: %.2fx (goal <= 1.6x); by URL "
+          "fetched %.1f MB for %.1f MB of distinct chunk ranges: %.3fx (goal <= 1.2x)"
+          % (statistics.median(firsts), statistics.median(opens), t3, t1x3, t3 / t1x3, s3, s1,
+             s3 / s1, fetched / 1e6, needed / 1e6, fetched / needed if needed else float("nan")),
+          flush=True)
+
+
+if __name__ == "__main__":
+    main()
