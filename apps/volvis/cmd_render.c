@@ -37,7 +37,8 @@ cli_render_usage(FILE *out) {
                  "                   every STEP-th, default 1), one PNG each: OUT's name with\n"
                  "                   _tNNNN before .png (head.png: head_t0000.png, ...); the\n"
                  "                   transfer function and view of step A for all; each step\n"
-                 "                   read while the one before is drawn\n"
+                 "                   read while the one before is drawn (out of core, with\n"
+                 "                   --memory-limit: the chunks the step before read)\n"
                  "  --repeat N       render the same frame N times (1 .. 100000) with one\n"
                  "                   renderer, whose caches carry over (the gpu renderer's\n"
                  "                   bricks on the device); writes the last frame, and the\n"
@@ -193,8 +194,8 @@ cli_render_main(int argc, char **argv) {
             return rc;
         if (r.has_time)
             return cli_usage_error(&a, "--time-range: not with --time");
-        if (r.memory_limit > 0 || vv_parallel_launched())
-            return cli_usage_error(&a, "--time-range: in memory, one process");
+        if (vv_parallel_launched())
+            return cli_usage_error(&a, "--time-range: one process");
         r.has_time = 1; /* the World from step A */
         r.time = range[0];
         r.time_range = 1;

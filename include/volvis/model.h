@@ -704,6 +704,19 @@ vv_status vv_object_set_channels_source(vv_object *obj, vv_source *source, int l
                                         const char *const *names);
 
 /**
+ * Replaces the source of volume object @p obj (out of core, one channel or
+ * several) by @p source of the same geometry and as many channels (another
+ * time step of the same file: vv_time_steps): its volumes become the new
+ * source's proxies over level @p level, and everything else (transfer
+ * functions, names, colours, visibility) stays. A reference to @p source
+ * is taken. Errors: VV_ERR_INVALID (not an object with a source, another
+ * channel count, proxies of another size: named), those of reading the
+ * proxies; on error @p obj is unchanged. Not thread-safe on the same
+ * object.
+ */
+vv_status vv_object_replace_source(vv_object *obj, vv_source *source, int level);
+
+/**
  * Drops the source of volume object @p obj (one channel or several): its
  * volumes (the proxies out of core) become what it shows, in memory.
  * Nothing when it has none. What a renderer without the region contract

@@ -252,7 +252,12 @@ typedef struct vv_time_steps vv_time_steps;
  * Opens the time steps of file @p what for object @p o (borrowed): its
  * channels' file indices (vv_object.channels[c].index), else @p load's
  * channel; @p load's DICOM series and raw description (@p load may be
- * NULL). Errors: those of vv_time_series_open; *out is NULL then.
+ * NULL). An object out of core (a pyramid's source) has each step opened
+ * out of core in the process cache, every channel at once, the next step's
+ * chunks read ahead in the background (vv_source_read_ahead: those the
+ * step before read, the view being the same); others read each step whole.
+ * Errors: those of vv_time_series_open, or of opening the file out of
+ * core; *out is NULL then.
  */
 vv_status vv_time_steps_open(vv_time_steps **out, const char *what, const vv_load_options *load,
                              const vv_object *o);

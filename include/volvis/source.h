@@ -235,6 +235,17 @@ int vv_source_wait(vv_source *s, double seconds);
 /** Cancels what its loader has queued (a view that moved on). Thread-safe. */
 void vv_source_cancel(vv_source *s);
 
+/**
+ * Read-ahead of another time step: asks @p s's background loader for the
+ * chunks that @p like read in its last frame (the boxes of its frame's
+ * plan, or of its newest request), soonest first, as vv_source_loading
+ * then counts them: @p s is the next step of the file @p like shows, drawn
+ * by the same view, so that its frame finds them resident. Returns at once.
+ * Errors: VV_ERR_UNSUPPORTED (not two pyramids, or of different levels),
+ * those of the request (VV_ERR_LIMIT, VV_ERR_NOMEM). Thread-safe.
+ */
+vv_status vv_source_read_ahead(vv_source *s, const vv_source *like);
+
 /** Its cache (borrowed); NULL for a memory source. */
 vv_cache *vv_source_cache(const vv_source *s);
 

@@ -242,6 +242,17 @@ vv_source_wait(vv_source *s, double seconds) {
     return s && s->ops->wait ? s->ops->wait(s->user, seconds) : 0;
 }
 
+vv_status
+vv_source_read_ahead(vv_source *s, const vv_source *like) {
+    if (!s || !like)
+        return vv_error_set(VV_ERR_INVALID, "source: NULL argument");
+    if (s->ops != like->ops || s->ops->version < 2 || !s->ops->read_ahead)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "source: %s: read-ahead is between two pyramids of one kind",
+                            vv_path_basename(s->path));
+    return s->ops->read_ahead(s->user, like->user);
+}
+
 void
 vv_source_cancel(vv_source *s) {
     if (s && s->ops->cancel)

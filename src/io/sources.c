@@ -149,6 +149,11 @@ py_close(void *user) {
     vv_pyramid_free(user);
 }
 
+static vv_status
+py_read_ahead(void *user, void *like_user) {
+    return vv_pyramid_request_like(user, like_user);
+}
+
 static int
 py_channels(void *user) {
     return vv_pyramid_channels(user);
@@ -188,6 +193,7 @@ static const vv_source_ops pyramid_ops = {
     .channel_level = py_channel_level,
     .channel_read_box = py_channel_read_box,
     .channel_proxy = py_channel_proxy,
+    .read_ahead = py_read_ahead,
 };
 
 vv_status

@@ -190,6 +190,49 @@ vv_object_set_channels_source(vv_object *obj, vv_source *source, int level,
     return VV_OK;
 }
 
+vv_status
+vv_object_replace_source(vv_object *obj, vv_source *source, int level) {
+    if (!obj || obj->type != VV_OBJECT_VOLUME || !obj->source || !source || !obj->volume)
+        return vv_error_set(VV_ERR_INVALID, "replace source: not a volume object out of core");
+    const int n = obj->n_channels > 1 ? obj->n_channels : 1;
+    if (vv_source_channels(source) != n)
+        return vv_error_set(
+            VV_ERR_INVALID, "replace source: %s: %s carries %d channel%s, the object has %d",
+            obj->name, vv_path_basename(vv_source_path(source)), vv_source_channels(source),
+            vv_source_channels(source) == 1 ? "" : "s", n);
+    vv_volume *proxy[VV_MAX_CHANNELS] = {NULL};
+    vv_status s = VV_OK;
+    for (int c = 0; c < n && s == VV_OK; c++) {
+        s = vv_source_channel_proxy(source, c, level, &proxy[c]);
+        const vv_volume *old = n > 1 ? obj->channels[c].volume : obj->volume;
+        if (s == VV_OK && old &&
+            (proxy[c]->dims[0] != old->dims[0] || proxy[c]->dims[1] != old->dims[1] ||
+             proxy[c]->dims[2] != old->dims[2]))
+            s = vv_error_set(VV_ERR_INVALID,
+                             "replace source: %s: channel %d's proxy is %dx%dx%d, the old one "
+                             "%dx%dx%d",
+                             obj->name, c, proxy[c]->dims[0], proxy[c]->dims[1], proxy[c]->dims[2],
+                             old->dims[0], old->dims[1], old->dims[2]);
+    }
+    if (s != VV_OK) {
+        for (int c = 0; c < n; c++)
+            vv_volume_free(proxy[c]);
+        return s;
+    }
+    for (int c = 0; c < obj->n_channels; c++) {
+        vv_volume_free(obj->channels[c].volume);
+        obj->channels[c].volume = vv_volume_ref(proxy[c]);
+    }
+    vv_volume_free(obj->volume);
+    obj->volume = proxy[0]; /* the reference read */
+    for (int c = 1; c < n; c++)
+        vv_volume_free(proxy[c]); /* the channels hold their own */
+    vv_source_ref(source);
+    vv_source_free(obj->source);
+    obj->source = source;
+    return VV_OK;
+}
+
 void
 vv_object_drop_source(vv_object *obj) {
     if (!obj || !obj->source)

@@ -735,7 +735,33 @@ vv_world_open(vv_world **out, const char *what, const vv_world_open_options *opt
 struct vv_time_steps {
     int n;                               /* channels (1 for an object of one) */
     vv_time_series *ts[VV_MAX_CHANNELS]; /* channel c's steps */
+    /* out of core: each step a source of the object's channels */
+    int ooc, n_times;
+    char *path;
+    vv_open_options oo;
+    vv_source *ahead; /* the next step's, opened and read ahead */
+    int ahead_step;
 };
+
+/* Step @p step of @p t's file out of core (every channel of the object). */
+static vv_status
+steps_open_source(vv_time_steps *t, int step, vv_source **out, int *n_times) {
+    vv_open_options oo = t->oo;
+    oo.load.time = step;
+    vv_opened od;
+    vv_error_clear();
+    vv_status s = vv_open(&od, t->path, &oo);
+    if (s == VV_OK &&
+        (od.kind != VV_DATA_VOLUME || vv_source_get_kind(od.source) == VV_SOURCE_MEMORY))
+        s = vv_error_set(VV_ERR_UNSUPPORTED, "%s: step %d is not out of core", t->path, step);
+    if (s == VV_OK) {
+        *out = vv_source_ref(od.source);
+        if (n_times)
+            *n_times = od.info.n_times > 1 ? od.info.n_times : 1;
+    }
+    vv_opened_clear(&od);
+    return s;
+}
 
 vv_status
 vv_time_steps_open(vv_time_steps **out, const char *what, const vv_load_options *load,
@@ -748,6 +774,36 @@ vv_time_steps_open(vv_time_steps **out, const char *what, const vv_load_options 
         return vv_error_set(VV_ERR_NOMEM, "%s: time steps: out of memory", what);
     t->n = o->n_channels > 0 ? o->n_channels : 1;
     vv_status s = VV_OK;
+    if (o->source && vv_source_get_kind(o->source) == VV_SOURCE_PYRAMID) {
+        /* out of core: a step a source, opened as the object's was */
+        t->ooc = 1;
+        t->ahead_step = -1;
+        const size_t len = strlen(what) + 1;
+        if ((t->path = malloc(len)))
+            memcpy(t->path, what, len);
+        vv_open_options_init(&t->oo);
+        t->oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+        t->oo.levels = 1;
+        t->oo.cache = vv_source_cache(o->source);
+        t->oo.load.series = load ? load->series : 0;
+        if (o->n_channels > 1) {
+            t->oo.n_channels = o->n_channels;
+            for (int c = 0; c < o->n_channels; c++)
+                t->oo.channels[c] = o->channels[c].index;
+        } else {
+            t->oo.load.channel = load ? load->channel : -1;
+        }
+        vv_source *s0 = NULL;
+        s = t->path ? steps_open_source(t, 0, &s0, &t->n_times)
+                    : vv_error_set(VV_ERR_NOMEM, "%s: out of memory", what);
+        vv_source_free(s0);
+        if (s != VV_OK) {
+            vv_time_steps_free(t);
+            return s;
+        }
+        *out = t;
+        return VV_OK;
+    }
     for (int c = 0; c < t->n && s == VV_OK; c++) {
         vv_load_options opt;
         vv_load_options_init(&opt);
@@ -771,11 +827,50 @@ vv_time_steps_open(vv_time_steps **out, const char *what, const vv_load_options 
 
 int
 vv_time_steps_count(const vv_time_steps *t) {
-    return t ? vv_time_series_count(t->ts[0]) : 0;
+    return !t ? 0 : t->ooc ? t->n_times : vv_time_series_count(t->ts[0]);
+}
+
+/* vv_time_steps_show out of core: step @p step's source (the one read
+ * ahead, else opened now) into @p o, the next step's opened and asked for
+ * what the step before read. */
+static vv_status
+show_ooc(vv_time_steps *t, vv_object *o, int step, int next) {
+    if (step < 0 || step >= t->n_times)
+        return vv_error_set(VV_ERR_INVALID, "%s: time step %d asked, the file has %d", t->path,
+                            step, t->n_times);
+    vv_source *src = NULL;
+    vv_status s = VV_OK;
+    if (t->ahead && t->ahead_step == step) {
+        src = t->ahead;
+        t->ahead = NULL;
+    } else {
+        s = steps_open_source(t, step, &src, NULL);
+    }
+    vv_source *before = o->source ? vv_source_ref(o->source) : NULL;
+    if (s == VV_OK && (s = vv_object_replace_source(o, src, 0)) == VV_OK)
+        o->time = step;
+    vv_source_free(src);
+    if (s == VV_OK && next >= 0 && next < t->n_times && next != t->ahead_step) {
+        vv_source_free(t->ahead);
+        t->ahead = NULL;
+        t->ahead_step = -1;
+        /* a failure to read ahead only costs the next step its head start */
+        if (steps_open_source(t, next, &t->ahead, NULL) == VV_OK) {
+            t->ahead_step = next;
+            if (before && vv_source_read_ahead(t->ahead, before) != VV_OK)
+                vv_error_clear();
+        } else {
+            vv_error_clear();
+        }
+    }
+    vv_source_free(before);
+    return s;
 }
 
 vv_status
 vv_time_steps_show(vv_time_steps *t, vv_object *o, int step, int next) {
+    if (t->ooc)
+        return show_ooc(t, o, step, next);
     vv_volume *v[VV_MAX_CHANNELS] = {NULL};
     vv_status s = VV_OK;
     for (int c = 0; c < t->n && s == VV_OK; c++)
@@ -795,5 +890,7 @@ vv_time_steps_free(vv_time_steps *t) {
         return;
     for (int c = 0; c < VV_MAX_CHANNELS; c++)
         vv_time_series_free(t->ts[c]);
+    vv_source_free(t->ahead);
+    free(t->path);
     free(t);
 }

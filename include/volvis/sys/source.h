@@ -355,6 +355,10 @@ typedef struct vv_source_ops {
                                   const int hi[3], vv_volume **out);
     /** proxy of channel @p channel. */
     vv_status (*channel_proxy)(void *user, int channel, int level, vv_volume **out);
+    /** Optional (NULL): asks the loader for the chunks that @p like_user (a source of the
+     *  same table: another time step of the same file) read in its last frame
+     *  (vv_source_read_ahead). Returns at once. */
+    vv_status (*read_ahead)(void *user, void *like_user);
 } vv_source_ops;
 
 /**

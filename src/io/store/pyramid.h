@@ -176,6 +176,13 @@ vv_status vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out);
  * (over 2^24 chunks), VV_ERR_NOMEM.
  */
 vv_status vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi);
+/**
+ * vv_pyramid_request of the boxes that @p like read in its last frame (its
+ * plan's, or its newest request's): @p p is another time step of the store
+ * @p like reads, drawn by the same view. Errors: VV_ERR_UNSUPPORTED (other
+ * levels), those of vv_pyramid_request.
+ */
+vv_status vv_pyramid_request_like(vv_pyramid *p, vv_pyramid *like);
 /** Chunks queued or being read by the loader now (0: idle). */
 int vv_pyramid_loading(vv_pyramid *p);
 /**

@@ -94,6 +94,10 @@ struct vv_pyramid {
     py_use *ubucket[PY_BUCKETS];
     int cursor;
     int plan_n, *plan_box; /* the plan's boxes in order: level, lo[3], hi[3] each */
+    /* the boxes of the last frame's plan, or of the newest request when a
+     * frame made none (progressive frames), as plan_box: what the next time
+     * step's pyramid is asked for ahead (vv_pyramid_request_like) */
+    int last_n, *last_box;
     vv_pyramid_stats st;
     /* the loader (vv_pyramid_request): threads reading the queue's chunks
      * into the cache. lock (the cache's) guards everything above and below;

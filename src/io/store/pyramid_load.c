@@ -59,6 +59,29 @@ py_clear_plan(vv_pyramid *p) {
     p->plan_n = 0;
 }
 
+/* The boxes of a frame's plan or request kept as the last ones (lock
+ * held; a box out of range left out); none kept when out of memory. */
+static void
+keep_last(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
+    if (n <= 0)
+        return;
+    int *b = malloc(sizeof(int) * 7 * (size_t)n);
+    if (!b)
+        return;
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        if (level[i] < 0 || level[i] >= p->n_levels)
+            continue;
+        b[7 * m] = level[i];
+        memcpy(b + 7 * m + 1, lo + 3 * i, sizeof(int) * 3);
+        memcpy(b + 7 * m + 4, hi + 3 * i, sizeof(int) * 3);
+        m++;
+    }
+    free(p->last_box);
+    p->last_box = b;
+    p->last_n = m;
+}
+
 /* The plan's next box needing chunk @p c from the box being read on;
  * INT_MAX: none. */
 static int
@@ -366,6 +389,7 @@ vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const 
                 }
     }
     p->st.cancelled += (uint64_t)(p->q_n - p->q_pos); /* what the view made stale */
+    keep_last(p, n, level, lo, hi);
     p->stalled = 0;
     free(p->queue);
     p->queue = q;
@@ -377,6 +401,44 @@ vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const 
     pthread_cond_broadcast(&p->work);
     pthread_mutex_unlock(p->lock);
     free(seen);
+    return s;
+}
+
+vv_status
+vv_pyramid_request_like(vv_pyramid *p, vv_pyramid *like) {
+    if (!p || !like)
+        return vv_error_set(VV_ERR_INVALID, "pyramid: NULL argument");
+    if (p->n_levels != like->n_levels)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "pyramid: read-ahead between %d and %d levels",
+                            p->n_levels, like->n_levels);
+    for (int l = 0; l < p->n_levels; l++)
+        for (int k = 0; k < 3; k++)
+            if (p->lv[l].dims[k] != like->lv[l].dims[k])
+                return vv_error_set(VV_ERR_UNSUPPORTED,
+                                    "pyramid: read-ahead between levels of other sizes");
+    pthread_mutex_lock(like->lock);
+    const int n = like->last_n;
+    int *b = n > 0 ? malloc(sizeof(int) * 7 * (size_t)n) : NULL;
+    if (b)
+        memcpy(b, like->last_box, sizeof(int) * 7 * (size_t)n);
+    pthread_mutex_unlock(like->lock);
+    if (n > 0 && !b)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    int *lv = malloc(sizeof(int) * (size_t)(n ? n : 1)),
+        *lo = malloc(sizeof(int) * 3 * (size_t)(n ? n : 1)),
+        *hi = malloc(sizeof(int) * 3 * (size_t)(n ? n : 1));
+    vv_status s = lv && lo && hi ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; s == VV_OK && i < n; i++) {
+        lv[i] = b[7 * i];
+        memcpy(lo + 3 * i, b + 7 * i + 1, sizeof(int) * 3);
+        memcpy(hi + 3 * i, b + 7 * i + 4, sizeof(int) * 3);
+    }
+    if (s == VV_OK && n > 0)
+        s = vv_pyramid_request(p, n, lv, lo, hi);
+    free(b);
+    free(lv);
+    free(lo);
+    free(hi);
     return s;
 }
 
@@ -582,6 +644,7 @@ plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi
         return s;
     }
     py_each_chunk(p, find_uses);
+    keep_last(p, n, level, lo, hi);
     if (p->store.prefetch && n > 0 && (p->plan_box = malloc(sizeof(int) * 7 * (size_t)n))) {
         for (int i = 0; i < n; i++) {
             const int ok = level[i] >= 0 && level[i] < p->n_levels;

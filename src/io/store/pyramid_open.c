@@ -30,6 +30,7 @@ vv_pyramid_free(vv_pyramid *p) {
         return;
     py_stop_loaders(p);
     free(p->queue);
+    free(p->last_box);
     pthread_mutex_lock(p->lock);
     py_clear_plan(p);
     py_each_chunk(p, py_drop_chunk);
