@@ -270,7 +270,9 @@ static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl",  ".off", ".d
  * when level 0 holds more than a quarter of the process's cache budget
  * (vvg_document_memory_limit, set at start-up), a .vvb always, a file with
  * pyramid levels by its levels (level of detail), not by bricks; a volume
- * file's every channel as one object when it is read whole. */
+ * file's every channel as one object, in memory or out of core (a
+ * pyramid's nodes holding every channel: the channel panel's toggles,
+ * colours and contrast redraw from the cache). */
 static void
 open_options(VvgDocument *doc, vv_world_open_options *o) {
     vv_world_open_options_init(o);
@@ -558,12 +560,9 @@ vvg_document_open_finish(vvg_open_job *job, GError **error) {
                     base);
         return FALSE;
     }
-    if (info.n_channels > VV_MAX_CHANNELS && !info.out_of_core)
+    if (info.n_channels > VV_MAX_CHANNELS)
         g_message("volvis-gui: %s has %d channels; the first %d are shown", path, info.n_channels,
                   VV_MAX_CHANNELS);
-    else if (info.n_channels > 1 && info.out_of_core)
-        g_message("volvis-gui: %s has %d channels; out of core the first is shown", path,
-                  info.n_channels);
     g_autofree char *base = volume_name(path);
     /* before the object, whose "changed" the pages fill from; keyed as
      * remember_source names the file; a file out of core shows its step 0 */

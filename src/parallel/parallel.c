@@ -65,6 +65,10 @@ struct vv_parallel {
     const void *src;
     uint64_t src_modified;
     vv_volume *brick;
+    /* a multi-channel object: every channel's brick over the same box
+     * (cbrick[0] is brick), nb of them; an object of one channel: nb 1 */
+    vv_volume *cbrick[VV_MAX_CHANNELS];
+    int nb;
     vv_render_region rg; /* the region the brick is (voxels, rectangle: set per frame) */
     int box_lo[3], box_hi[3];
     int ghost; /* the brick's voxels beyond each face of the box: 1, iso 2 */
@@ -254,6 +258,8 @@ vv_parallel_free(vv_parallel *p) {
         return;
     if (p->owns_ren)
         vv_renderer_free(p->ren);
+    for (int c = 1; c < p->nb; c++)
+        vv_volume_free(p->cbrick[c]);
     vv_volume_free(p->brick);
     vv_source_free(p->source);
     free(p);
@@ -605,19 +611,65 @@ composite(const par_plan *pl, float *img, size_t P, vv_region_op mode, int ortho
 /* ---------------------------------------------------------------------- */
 /* The brick                                                                */
 
+/* Drops the bricks kept. */
+static void
+drop_bricks(vv_parallel *p) {
+    for (int c = 1; c < p->nb; c++)
+        vv_volume_free(p->cbrick[c]);
+    memset(p->cbrick, 0, sizeof p->cbrick);
+    vv_volume_free(p->brick);
+    p->brick = NULL;
+    p->nb = 0;
+}
+
+static vv_status make_brick_of(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost,
+                               int channel, vv_volume **out);
+
+/* This rank's bricks of object @p obj: one, or one per channel of a
+ * multi-channel object (every channel's box read at once: a pyramid's
+ * chunks hold them all), kept while the box and the data stay. */
 static vv_status
-make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost) {
-    const vv_volume *g = p->source ? &p->hdr : v;
+make_brick(vv_parallel *p, const vv_object *obj, const par_plan *pl, int ghost) {
+    const vv_volume *v = obj->volume;
+    const int n = obj->n_channels > 1 ? obj->n_channels : 1;
     const void *key = p->source ? (const void *)p->source : (const void *)v;
     const uint64_t mod = p->source ? 0 : v->modified;
-    int same = p->brick && p->src == key && p->src_modified == mod;
+    int same = p->brick && p->src == key && p->src_modified == mod && p->nb == n;
     same = same && p->ghost == ghost;
     for (int a = 0; a < 3 && same; a++)
         same = p->box_lo[a] == pl->lo[a] && p->box_hi[a] == pl->hi[a];
+    for (int c = 1; c < n && same && !p->source; c++)
+        same = p->cbrick[c] && obj->channels[c].volume &&
+               p->cbrick[c]->modified == obj->channels[c].volume->modified;
     if (same)
         return VV_OK;
-    vv_volume_free(p->brick);
-    p->brick = NULL;
+    drop_bricks(p);
+    vv_status s = VV_OK;
+    for (int c = 0; c < n && s == VV_OK; c++)
+        s = make_brick_of(p, n > 1 ? obj->channels[c].volume : v, pl, ghost, n > 1 ? c : -1,
+                          &p->cbrick[c]);
+    if (s != VV_OK) {
+        for (int c = 0; c < n; c++)
+            vv_volume_free(p->cbrick[c]);
+        memset(p->cbrick, 0, sizeof p->cbrick);
+        return s;
+    }
+    p->brick = p->cbrick[0];
+    p->nb = n;
+    p->src = key;
+    p->src_modified = mod;
+    memcpy(p->box_lo, pl->lo, sizeof p->box_lo);
+    p->ghost = ghost;
+    memcpy(p->box_hi, pl->hi, sizeof p->box_hi);
+    return VV_OK;
+}
+
+/* The brick of channel @p channel (-1: an object of one channel) cut from
+ * @p v or read from the source into *out, and the region it is. */
+static vv_status
+make_brick_of(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost, int channel,
+              vv_volume **out) {
+    const vv_volume *g = p->source ? &p->hdr : v;
     /* the box, @p ghost voxels beyond each face (within the volume) */
     int off[3], end[3], dims[3];
     for (int a = 0; a < 3; a++) {
@@ -630,8 +682,11 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost) {
     vv_volume *b = NULL;
     vv_status s;
     if (p->source) {
-        /* only this rank's box is read from the file */
-        if ((s = vv_source_read_box(p->source, p->level, off, end, &b)) != VV_OK)
+        /* only this rank's box is read from the file (a channel's: every
+         * channel's chunks are read with the first, held in the cache) */
+        s = channel >= 0 ? vv_source_channel_read_box(p->source, channel, p->level, off, end, &b)
+                         : vv_source_read_box(p->source, p->level, off, end, &b);
+        if (s != VV_OK)
             return vv_error_prefix(s, "parallel: brick %d..%d x %d..%d x %d..%d", off[0], end[0],
                                    off[1], end[1], off[2], end[2]);
     } else {
@@ -661,12 +716,7 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost) {
         b->unit = v->unit;
         b->space = v->space;
     }
-    p->brick = b;
-    p->src = key;
-    p->src_modified = mod;
-    memcpy(p->box_lo, pl->lo, sizeof p->box_lo);
-    p->ghost = ghost;
-    memcpy(p->box_hi, pl->hi, sizeof p->box_hi);
+    *out = b;
     memset(&p->rg, 0, sizeof p->rg);
     for (int a = 0; a < 3; a++) {
         p->rg.dims[a] = g->dims[a];
@@ -674,7 +724,6 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost) {
         p->rg.lo[a] = pl->lo[a] > 0 ? pl->lo[a] : -INFINITY;
         p->rg.hi[a] = pl->hi[a] < g->dims[a] - 1 ? pl->hi[a] : INFINITY;
     }
-    p->rg.voxels = b;
     return VV_OK;
 }
 
@@ -700,8 +749,7 @@ use_source(vv_parallel *p, const vv_object *obj, int level) {
     }
     /* a range of 0 .. 0: a file opened without its range; learnt from the bricks */
     p->range_done = !(p->hdr.range[0] == 0 && p->hdr.range[1] == 0);
-    vv_volume_free(p->brick);
-    p->brick = NULL;
+    drop_bricks(p);
     p->src = NULL;
 }
 
@@ -730,7 +778,28 @@ find_object(const vv_world *w) {
     return found;
 }
 
-/* This rank's part: plan, brick, partial image (P records in *img_out). */
+/* The passes an object is drawn in: one (every channel at once under the
+ * composite rule), or a pass a drawn channel under the additive and
+ * maximum rules (pass i draws channel ch[i]; their images are composited
+ * over the ranks each, then added). Returns their count. */
+static int
+object_passes(const vv_object *obj, int ch[VV_MAX_CHANNELS]) {
+    if (obj->n_channels < 2 || obj->blend == VV_BLEND_COMPOSITE)
+        return 1;
+    int n = 0;
+    for (int c = 0; c < obj->n_channels; c++)
+        if (obj->channels[c].visible && obj->channels[c].volume)
+            ch[n++] = c;
+    return n > 0 ? n : 1;
+}
+
+static vv_status render_pass(vv_parallel *p, const vv_world *w, const vv_view *view,
+                             const vv_render_options *opt, const par_plan *pl, int oi, int pass,
+                             float **img_out, vv_region_op *op, vv_region_image *classify,
+                             vv_parallel_stats *st);
+
+/* This rank's part: plan, bricks, the first pass's partial image (P records
+ * in *img_out). */
 static vv_status
 render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *view,
             const vv_render_options *opt, par_plan *pl, int *obj_index, float **img_out,
@@ -749,7 +818,7 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
         s = plan_build(pl, p->rank, p->size, dims, &p->opt);
     }
     if (s == VV_OK)
-        s = make_brick(p, obj->volume, pl, obj->mode == VV_MODE_ISO ? 2 : 1);
+        s = make_brick(p, obj, pl, obj->mode == VV_MODE_ISO && obj->n_channels < 2 ? 2 : 1);
     /* every rank learns of a failure to cut or read a brick here */
     s = vv_parallel_agree(s);
     *agreed = s != VV_OK; /* the same on every rank */
@@ -769,11 +838,36 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
         p->brick->range[0] = p->hdr.range[0];
         p->brick->range[1] = p->hdr.range[1];
     }
+    return render_pass(p, w, view, opt, pl, oi, 0, img_out, op, classify, st);
+}
+
+/* Pass @p pass of this rank's part (object_passes): its partial image (P
+ * records in *img_out). */
+static vv_status
+render_pass(vv_parallel *p, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+            const par_plan *pl, int oi, int pass, float **img_out, vv_region_op *op,
+            vv_region_image *classify, vv_parallel_stats *st) {
+    const vv_object *obj = w->objects[oi];
+    vv_status s = VV_OK;
     /* the region: this rank's brick, seen where its box projects; the
      * World keeps the object's own volume (the whole one, or rank 0's
      * proxy when the ranks read by bricks) for effects that cross bricks */
     vv_render_region rg = p->rg;
     rg.object = oi;
+    rg.voxels = p->brick;
+    int ch[VV_MAX_CHANNELS];
+    const int npass = object_passes(obj, ch);
+    if (p->nb > 1 && npass > 1) { /* one channel alone */
+        rg.voxels = p->cbrick[ch[pass]];
+        rg.pass_channel = ch[pass] + 1;
+    } else if (p->nb > 1) { /* every channel at once */
+        for (int c = 0; c < p->nb; c++)
+            if (obj->channels[c].visible && obj->channels[c].volume) {
+                rg.voxels = p->cbrick[c];
+                break;
+            }
+        rg.channel_voxels = (const vv_volume *const *)p->cbrick;
+    }
     {
         const vv_volume *g = p->source ? &p->hdr : obj->volume;
         vv_object geo = *obj; /* shallow: nothing in it is released */
@@ -801,7 +895,9 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
         (obj->mode == VV_MODE_XRAY || obj->mode == VV_MODE_ATTENUATED_MIP) && p->rank == 0;
     if (s == VV_OK && rg.x1 > rg.x0 && rg.y1 <= rg.y0 && !sum) {
         vv_region_image_clear(&ri); /* off screen */
-        ri.op = vv_region_op_for(obj->mode);
+        ri.op = p->nb > 1
+                    ? (npass > 1 && obj->blend == VV_BLEND_MAXIMUM ? VV_REGION_MAX : VV_REGION_OVER)
+                    : vv_region_op_for(obj->mode);
     } else if (s == VV_OK) {
         s = vv_renderer_render_region(p->ren, w, view, &rg, opt, &ri);
     }
@@ -830,6 +926,11 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
     memcpy(st->brick_hi, pl->hi, sizeof st->brick_hi);
     return s;
 }
+
+static vv_status composite_pass(vv_parallel *p, par_plan *pl, float *img, size_t P, vv_region_op op,
+                                int ortho, const double E[3], const double D[3],
+                                vv_parallel_stats *stp, float *sum, const vv_world *w,
+                                const vv_region_image *clsp, vv_image *out);
 
 vv_status
 vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
@@ -874,11 +975,55 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     double E[3] = {e.x, e.y, e.z}, D[3];
     for (int a = 0; a < 3; a++)
         D[a] = w2i.m[a][0] * fwd.x + w2i.m[a][1] * fwd.y + w2i.m[a][2] * fwd.z;
+    /* the additive and maximum rules: a pass a channel, each composited
+     * over the ranks and gathered, added on rank 0 (sums over black) */
+    int chs[VV_MAX_CHANNELS];
+    const int npass = object_passes(obj, chs);
+    float *sum = NULL; /* rank 0, several passes: colour, transmittance, depth a pixel */
+    if (npass > 1 && p->rank == 0 && !(sum = malloc(sizeof(float) * 5 * (P ? P : 1))))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (size_t i = 0; sum && i < P; i++) {
+        sum[5 * i] = sum[5 * i + 1] = sum[5 * i + 2] = 0;
+        sum[5 * i + 3] = 1;
+        sum[5 * i + 4] = INFINITY;
+    }
+    s = vv_parallel_agree(s);
+    for (int pass = 0; pass < npass && s == VV_OK; pass++) {
+        if (pass > 0) {
+            free(img);
+            img = NULL;
+            s = render_pass(p, w, view, opt, &pl, oi, pass, &img, &op, &cls, &st);
+            s = vv_parallel_agree(s);
+            if (s != VV_OK)
+                break;
+        }
+        s = composite_pass(p, &pl, img, P, op, ortho, E, D, &st, npass > 1 ? sum : NULL, w, &cls,
+                           out);
+    }
+    free(sum);
+    free(img);
+    plan_free(&pl);
+    if (stats)
+        *stats = st;
+    return s;
+}
+
+/* One pass's partial images (@p img, this rank's) composited over the
+ * ranks and gathered to rank 0: finished over the background into @p out,
+ * or with @p sum (several passes) added into it (colour, transmittance,
+ * nearest depth; the last pass writes @p out). Collective. */
+static vv_status
+composite_pass(vv_parallel *p, par_plan *pl, float *img, size_t P, vv_region_op op, int ortho,
+               const double E[3], const double D[3], vv_parallel_stats *stp, float *sum,
+               const vv_world *w, const vv_region_image *clsp, vv_image *out) {
+    vv_parallel_stats st = *stp;
+    const vv_region_image cls = *clsp;
+    vv_status s = VV_OK;
     double t0 = MPI_Wtime();
     if (p->opt.barrier)
         MPI_Barrier(MPI_COMM_WORLD);
     double t1 = MPI_Wtime();
-    s = composite(&pl, img, P, op, ortho, E, D);
+    s = composite(pl, img, P, op, ortho, E, D);
     double t2 = MPI_Wtime();
     st.wait = t1 - t0;
     st.composite = t2 - t1;
@@ -892,9 +1037,9 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
         whole = malloc(sizeof(float) * PAR_REC * (P ? P : 1));
         if (!counts || !displs || !whole)
             s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-        for (int r = 0; r < pl.R && s == VV_OK; r++) {
+        for (int r = 0; r < pl->R && s == VV_OK; r++) {
             size_t a, b;
-            final_range(&pl, r, P, &a, &b);
+            final_range(pl, r, P, &a, &b);
             counts[r] = (int)(PAR_REC * (b - a));
             displs[r] = (int)(PAR_REC * a);
         }
@@ -902,8 +1047,8 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     s = vv_parallel_agree(s);
     if (s == VV_OK) {
         size_t a = 0, b = 0;
-        if (!pl.is_extra)
-            final_range(&pl, pl.core, P, &a, &b);
+        if (!pl->is_extra)
+            final_range(pl, pl->core, P, &a, &b);
         int rc = MPI_Gatherv(img + PAR_REC * a, (int)(PAR_REC * (b - a)), MPI_FLOAT, whole, counts,
                              displs, MPI_FLOAT, 0, MPI_COMM_WORLD);
         if (rc != MPI_SUCCESS)
@@ -928,21 +1073,36 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
                 keys[i] = r[5];
         }
         /* the background once, as the whole render adds it (xray: the means
-         * classified first; attenuated-mip: the attenuated maxima) */
+         * classified first; attenuated-mip: the attenuated maxima); a pass of
+         * several over black, added to the others' */
         vv_region_image fin = {.image = out,
                                .key = keys,
                                .op = op,
                                .classify = cls.classify,
                                .classify_ctx = cls.classify_ctx};
-        vv_region_image_finish(&fin, w->background);
+        vv_region_image_finish(&fin, sum ? (vv_vec3){0, 0, 0} : w->background);
+        for (size_t i = 0; sum && i < P; i++) {
+            const float *px = out->rgba + 4 * i;
+            float *q = sum + 5 * i;
+            for (int k = 0; k < 3; k++)
+                q[k] += px[k];
+            q[3] *= 1 - (px[3] < 1 ? px[3] : 1);
+            q[4] = out->depth[i] < q[4] ? out->depth[i] : q[4];
+        }
+        const float bg[3] = {(float)w->background.x, (float)w->background.y,
+                             (float)w->background.z};
+        for (size_t i = 0; sum && i < P; i++) { /* the sums so far over the background */
+            const float *q = sum + 5 * i;
+            for (int k = 0; k < 3; k++)
+                out->rgba[4 * i + (size_t)k] = q[k] + q[3] * bg[k];
+            out->rgba[4 * i + 3] = 1 - q[3];
+            out->depth[i] = q[4];
+        }
     }
     free(keys);
     free(counts);
     free(displs);
     free(whole);
-    free(img);
-    plan_free(&pl);
-    if (stats)
-        *stats = st;
+    *stp = st;
     return s;
 }

@@ -20,6 +20,7 @@
 
 #include "core/internal.h"
 #include "render/frame.h"
+#include "render/shade.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 
@@ -380,6 +381,17 @@ vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_
     if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "object '%s': solid textures are not rendered by regions", obj->name);
+    if (obj->n_channels > 1 && rg->pass_channel > 0) {
+        const int c = rg->pass_channel - 1;
+        if (c >= obj->n_channels)
+            return vv_error_set(VV_ERR_INVALID, "object '%s': no channel %d (it has %d)", obj->name,
+                                c, obj->n_channels);
+        *op = obj->blend == VV_BLEND_MAXIMUM ? VV_REGION_MAX : VV_REGION_OVER;
+        return VV_OK;
+    }
+    if (rg->pass_channel > 0)
+        return vv_error_set(VV_ERR_INVALID,
+                            "object '%s': a channel's pass of an object of one channel", obj->name);
     if (obj->n_channels > 1) {
         /* the channels mixed sample by sample and composited (the
          * composite rule): over, whatever the object's own mode */
@@ -408,6 +420,11 @@ vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_o
     if (s != VV_OK)
         return s;
     const vv_object *obj = w->objects[rg->object];
+    if (rg->pass_channel > 0) { /* one channel alone: the region's voxels are its */
+        vv_vchannel_object(obj, &obj->channels[rg->pass_channel - 1], part);
+        part->volume = (vv_volume *)rg->voxels;
+        return VV_OK;
+    }
     *part = *obj;
     part->volume = (vv_volume *)rg->voxels;
     if (obj->n_channels > 1) {

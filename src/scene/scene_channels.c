@@ -7,7 +7,9 @@
  *                 {"channel": 3, "labels": true}, ...]}
  *
  * Each entry loads channel "channel" of the object's file (TIFF, DICOM);
- * the object's "origin" and "spacing" place every channel.
+ * the object's "origin" and "spacing" place every channel. An object read
+ * out of core (its file a pyramid, the scene opened so) has its channels
+ * opened out of core together, one source carrying them all.
  */
 #include <jansson.h>
 #include <stdlib.h>
@@ -46,6 +48,9 @@ vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *fu
         return vv_scene_serr(c, kp, "\"filters\" apply to an object of one channel");
     vv_volume *vols[VV_MAX_CHANNELS] = {NULL};
     const char *names[VV_MAX_CHANNELS] = {NULL};
+    /* the object out of core (its file opened so: a pyramid): its channels
+     * too, one source carrying them all (vv_object_set_channels_source) */
+    const int ooc = o->source && vv_source_get_kind(o->source) == VV_SOURCE_PYRAMID && c->open;
     int index[VV_MAX_CHANNELS], visible[VV_MAX_CHANNELS], labels[VV_MAX_CHANNELS];
     json_t *tfs[VV_MAX_CHANNELS] = {NULL};
     for (size_t i = 0; i < n && st == VV_OK; i++) {
@@ -69,6 +74,8 @@ vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *fu
             st = vv_scene_missing(c, ip, "channel", "the channel's index in the file, from 0");
             break;
         }
+        if (ooc)
+            continue; /* read below, every channel at once */
         vv_load_options lo;
         vv_load_options_init(&lo);
         lo.channel = index[i];
@@ -84,8 +91,26 @@ vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *fu
         memcpy(vols[i]->origin, o->volume->origin, sizeof vols[i]->origin);
         memcpy(vols[i]->spacing, o->volume->spacing, sizeof vols[i]->spacing);
     }
-    if (st == VV_OK && (st = vv_object_set_channels(o, (int)n, vols, names)) != VV_OK)
+    if (st == VV_OK && ooc) {
+        vv_open_options oo = *c->open;
+        vv_load_options_init(&oo.load);
+        oo.load.time = o->time;
+        oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+        oo.levels = 1;
+        oo.n_channels = (int)n;
+        memcpy(oo.channels, index, sizeof(int) * n);
+        vv_opened od;
+        vv_error_clear();
+        st = vv_open(&od, full, &oo);
+        if (st == VV_OK)
+            st = vv_object_set_channels_source(
+                o, od.source, c->open->load.level > 0 ? c->open->load.level : 0, names);
+        vv_opened_clear(&od);
+        if (st != VV_OK)
+            st = vv_error_prefix(st, "%s: %s", c->path, kp);
+    } else if (st == VV_OK && (st = vv_object_set_channels(o, (int)n, vols, names)) != VV_OK) {
         st = vv_error_prefix(st, "%s: %s", c->path, kp);
+    }
     for (size_t i = 0; i < n && st == VV_OK; i++) {
         vv_channel *ch = &o->channels[i];
         ch->index = index[i];

@@ -29,6 +29,9 @@ Checks, each image looked at as the difference of two renders (PSNR):
   not step 0);
 - raytrace (shadows through every channel) >= 50 dB from itself in memory; the gpu
   renderer (lavapipe) out of core >= 45 dB from raycast in memory;
+- mpirun -n 2: each rank reads its box of every channel from the pyramid, the additive
+  and maximum rules a pass a channel composited over the ranks: >= 60 dB from one
+  process in memory;
 - omero "active": false hides a channel, as leaving it out of --channels does (>= 50 dB);
 - bad input: more than 16 channels asked, a channel the store does not have, a channel
   axis chunked differently at two levels: one line naming the store, a non-zero exit, no
@@ -252,6 +255,27 @@ gpu, text = render("gpu_ooc", c1, "--renderer", "gpu", "--level", "0", "--memory
 if cpu and gpu:
     d = psnr(cpu, gpu)
     check(d >= 45, f"gpu (lavapipe) out of core {d:.1f} dB from raycast in memory (>= 45)")
+
+# ---- MPI: each rank's box with all its channels, read from the pyramid ----------------------------
+mpirun = shutil.which("mpirun")
+if mpirun:
+    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
+    env["HWLOC_COMPONENTS"] = "-gl"
+    mpi = [mpirun, "--oversubscribe", "-n", "2", "-x", "ASAN_OPTIONS=detect_leaks=0:"
+           "abort_on_error=1"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
+    for blend, want in (("composite", 60), ("additive", 60), ("maximum", 60)):
+        ref, _ = render(f"mpi_ref_{blend}", c1, "--blend", blend, "--level", "0",
+                        "--set", "refinement=off")
+        out = os.path.join(OUT, f"mpi_{blend}.png")
+        p = subprocess.run(mpi + [VOLVIS, "render", c1, "-o", out, *SIZE, "--blend", blend],
+                           capture_output=True, text=True, env=env, timeout=300)
+        ok = p.returncode == 0 and os.path.exists(out) and ref
+        d = psnr(ref, out) if ok else 0
+        check(ok and "2 ranks" in p.stdout and d >= want,
+              f"mpirun -n 2, {blend}: each rank's box of every channel, {d:.1f} dB from one "
+              f"process (>= {want}) {p.stderr.strip()[-300:]}")
+else:
+    check(False, "mpirun is installed (openmpi-bin)")
 
 # ---- omero active: false ----------------------------------------------------------------------
 inactive = [dict(c) for c in OMERO]

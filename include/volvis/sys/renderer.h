@@ -222,6 +222,15 @@ typedef struct vv_render_region {
      * through every channel); NULL: none. Borrowed.
      */
     const vv_region_volume *channel_whole;
+    /**
+     * 0 (an initializer's default): the object as it is. c + 1: channel c
+     * of a multi-channel object alone, as an object of one channel (its
+     * volume `voxels`, its transfer function; composite mode, MIP under the
+     * maximum rule, its label colours): one pass of the additive or
+     * maximum rule, whose passes a caller combines over its regions (over,
+     * or max) and then adds (what the renderers do along a whole ray).
+     */
+    int pass_channel;
 } vv_render_region;
 
 /** A region render's output: the partial image and how it combines. */
