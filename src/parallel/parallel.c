@@ -966,10 +966,15 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     }
     const size_t P = (size_t)view->width * (size_t)view->height;
     const vv_object *obj = w->objects[oi];
-    /* the eye (or view direction) in the whole volume's index space */
+    /* the eye (or view direction) in the whole volume's index space: the
+     * level's, whose voxels the bricks are (an object out of core shows a
+     * coarse proxy, of other indices) */
     const int ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
     int ok = 0;
-    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(obj), &ok);
+    vv_object geo = *obj; /* shallow: nothing in it is released */
+    if (p->source)
+        geo.volume = &p->hdr;
+    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(&geo), &ok);
     const vv_vec3 e = vv_mat4_mul_point(w2i, view->eye);
     const vv_vec3 fwd = vv_vec3_sub(view->at, view->eye);
     double E[3] = {e.x, e.y, e.z}, D[3];
