@@ -105,9 +105,14 @@ class Pyramid:
     its levels' chunks, or a bricked file (a ``.vvb`` without levels, a raw
     file described by ``raw``, an uncompressed NRRD) by its bricks (one
     level), opened once through the format table (vv_open); channel
-    ``channel`` at time step ``time``. Opening reads the metadata (and a
-    pyramid's coarsest level) only. What it reads is held in the process's
-    one cache (:func:`memory_limit`; ``memory_limit`` here sets it first).
+    ``channel`` at time step ``time``, or with ``channels`` (a list of the
+    file's channel indices, up to 16) those channels at once: each chunk
+    then holds them all (read, cached and counted together), ``carried``
+    lists them, :meth:`read` and :meth:`proxy` take the position of one in
+    that list, and :meth:`object` is an object of them all. Opening reads
+    the metadata (and a pyramid's coarsest level) only. What it reads is
+    held in the process's one cache (:func:`memory_limit`; ``memory_limit``
+    here sets it first).
 
     Errors: FileError, FormatError (inconsistent multiscales, neither HDF5
     layout, a file read whole only), LimitError (a budget below one box's
@@ -115,7 +120,7 @@ class Pyramid:
     thread-safe; its background loader's methods (:attr:`loading`,
     :meth:`wait`, :meth:`cancel`, :attr:`stats`) too."""
 
-    def __init__(self, path, channel=0, time=None, memory_limit=None, raw=None):
+    def __init__(self, path, channel=0, time=None, memory_limit=None, raw=None, channels=None):
         self.path = os.fspath(path)
         if memory_limit is not None:
             globals()["memory_limit"](memory_limit)
@@ -124,6 +129,18 @@ class Pyramid:
         oo.mode = lib.VV_OPEN_OUT_OF_CORE_ONLY
         oo.levels = 1
         oo.load.channel = int(channel)
+        carried = [int(channel)]
+        if channels is not None:
+            carried = [int(c) for c in channels]
+            if not 1 <= len(carried) <= lib.VV_MAX_CHANNELS or any(c < 0 for c in carried):
+                raise InvalidError("Pyramid: channels %r: 1 to %d indices, each >= 0"
+                                   % (list(channels), lib.VV_MAX_CHANNELS))
+            if len(carried) > 1:
+                oo.n_channels = len(carried)
+                for i, c in enumerate(carried):
+                    oo.channels[i] = c
+            else:
+                oo.load.channel = carried[0]
         oo.load.time = -1 if time is None else int(time)
         if raw is not None:
             from .volume import _raw_params
@@ -141,8 +158,12 @@ class Pyramid:
         self.channels = int(od.info.n_channels)  # in the file
         self.times = int(od.info.n_times)
         self.channel_name = pystr(od.info.channel_name)
+        self.carried = carried
+        self.channel_names = [pystr(od.ch_info[i].channel_name) for i in range(len(carried))] \
+            if len(carried) > 1 else [self.channel_name]
         lib.vv_opened_clear(od)
         self._proxy = None
+        self._proxies = {}
         self._lock = threading.Lock()
 
     @classmethod
@@ -153,7 +174,10 @@ class Pyramid:
         p._c = ffi.gc(lib.vv_source_ref(src), lib.vv_source_free)
         p.channels = p.times = 1
         p.channel_name = ""
+        p.carried = list(range(int(lib.vv_source_channels(src))))
+        p.channel_names = [""] * len(p.carried)
         p._proxy = None
+        p._proxies = {}
         p._lock = threading.Lock()
         return p
 
@@ -230,16 +254,17 @@ class Pyramid:
         lib.vv_source_cancel(self._c)
 
     # ---- voxels
-    def read(self, level=0, lo=(0, 0, 0), hi=None):
+    def read(self, level=0, lo=(0, 0, 0), hi=None, channel=0):
         """Voxels ``lo`` .. ``hi`` (inclusive, (i, j, k); default the whole
         level) of level ``level`` as a numpy array [k, j, i] (a copy),
-        assembled from the cached pieces and those read for it. Errors:
-        InvalidError (a box outside the level), LimitError (it does not fit
-        the budget), those of reading a piece."""
-        vol = self._read(level, lo, hi)
+        assembled from the cached pieces and those read for it; ``channel``
+        the position in :attr:`carried` (0: the one channel). Errors:
+        InvalidError (a box outside the level, no such channel), LimitError
+        (it does not fit the budget), those of reading a piece."""
+        vol = self._read(level, lo, hi, channel)
         return np.array(vol.array, copy=True)
 
-    def _read(self, level, lo, hi):
+    def _read(self, level, lo, hi, channel=0):
         n = lib.vv_source_levels(self._c)
         if not 0 <= int(level) < n:
             raise InvalidError("Pyramid.read: level %d of %d" % (int(level), n))
@@ -249,21 +274,26 @@ class Pyramid:
         clo = ffi.new("int[3]", [int(x) for x in lo])
         chi = ffi.new("int[3]", [int(x) for x in hi])
         out = ffi.new("vv_volume **")
-        _lib.call_long(lambda prog: lib.vv_source_read_box(self._c, int(level), clo, chi, out),
+        _lib.call_long(lambda prog: lib.vv_source_channel_read_box(self._c, int(channel),
+                                                                   int(level), clo, chi, out),
                        None)
         return Volume._own(out[0])
 
-    def proxy(self):
+    def proxy(self, channel=0):
         """A coarse whole volume as a :class:`Volume` over level 0's box (a
         pyramid's coarsest level, a bricked file's every f-th voxel: what
         ``volvis render FILE`` frames the view and chooses the default
-        transfer function from); kept after the first call."""
-        if self._proxy is None:
+        transfer function from) of channel ``channel`` (its position in
+        :attr:`carried`); kept after the first call."""
+        c = int(channel)
+        if c not in self._proxies:
             out = ffi.new("vv_volume **")
             with self._lock:
-                _lib.call_long(lambda prog: lib.vv_source_proxy(self._c, 0, out), None)
-            self._proxy = Volume._own(out[0])
-        return self._proxy
+                _lib.call_long(lambda prog: lib.vv_source_channel_proxy(self._c, c, 0, out), None)
+            self._proxies[c] = Volume._own(out[0])
+        if c == 0:
+            self._proxy = self._proxies[0]
+        return self._proxies[c]
 
     def world(self, mode="composite", tf_range=None, isovalue=None, size=None, azimuth=0.0,
               elevation=0.0, zoom=1.0):
@@ -276,7 +306,10 @@ class Pyramid:
         w = World.for_volume(proxy, mode=mode, tf_range=tf_range, isovalue=isovalue, size=size,
                              azimuth=azimuth, elevation=elevation, zoom=zoom)
         for i in range(w._c.n_objects):
-            check(lib.vv_object_attach_source(w._c.objects[i], self._c, 0))
+            if len(self.carried) > 1:  # every channel it carries, in the default colours
+                check(lib.vv_object_set_channels_source(w._c.objects[i], self._c, 0, ffi.NULL))
+            else:
+                check(lib.vv_object_attach_source(w._c.objects[i], self._c, 0))
         return w
 
     def object(self, name=None, **properties):
@@ -286,7 +319,15 @@ class Pyramid:
         volumes; then ``properties`` as VolumeObject takes them (position,
         mode, tf, ...)."""
         obj = VolumeObject(self.proxy(), name)
-        check(lib.vv_object_attach_source(obj._c, self._c, 0))
+        if len(self.carried) > 1:  # an object of every channel it carries
+            cnames = [ffi.new("char[]", cstr((n or "channel %d" % c)[:60]))
+                      for n, c in zip(self.channel_names, self.carried)]
+            check(lib.vv_object_set_channels_source(obj._c, self._c, 0,
+                                                    ffi.new("char *[]", cnames)))
+            for i, c in enumerate(self.carried):
+                obj._c.channels[i].index = c
+        else:
+            check(lib.vv_object_attach_source(obj._c, self._c, 0))
         for k, v in properties.items():
             if not hasattr(VolumeObject, k) or k.startswith("_"):
                 raise InvalidError("Pyramid.object: unknown property %r" % (k,))

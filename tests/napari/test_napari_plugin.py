@@ -615,3 +615,83 @@ def test_widget_two_layers_and_visibility(make_napari_viewer, qtbot, plugin, out
     assert psnr(one, ref) >= 40
     volvis.save_png(both, str(out_dir / "widget_two_layers.png"))
     volvis.save_png(one, str(out_dir / "widget_one_layer.png"))
+
+
+def _channels_store(path):
+    """A 3-channel OME-Zarr 0.5 pyramid written by zarr-python 3 (c, z, y, x; 3 levels;
+    shards of 32^3 of inner chunks of one channel x 16^3, zstd), a blob a channel at its
+    own place, omero names, colours and windows."""
+    import zarr
+    from zarr.codecs import ZstdCodec
+    zz, yy, xx = np.mgrid[0:64, 0:80, 0:96].astype(np.float32)
+    chans = []
+    for cz, cy, cx, r2 in ((20, 30, 30, 150), (40, 50, 60, 250), (32, 40, 76, 350)):
+        b = 3000 * np.exp(-((zz - cz) ** 2 + (yy - cy) ** 2 + (xx - cx) ** 2) / r2)
+        chans.append(b.astype(np.uint16) + 60)
+    lv = np.stack(chans)
+    g = zarr.open_group(str(path), mode="w")
+    ds = []
+    for k in range(3):
+        a = g.create_array(str(k), shape=lv.shape, dtype=lv.dtype, chunks=(1, 16, 16, 16),
+                           shards=(1, 32, 32, 32), compressors=ZstdCodec(level=3))
+        a[:] = lv
+        f = 2.0 ** k
+        ds.append({"path": str(k), "coordinateTransformations": [
+            {"type": "scale", "scale": [1.0, f, f, f]},
+            {"type": "translation", "translation": [0.0] + [(f - 1) / 2] * 3}]})
+        s = [d // 2 * 2 for d in lv.shape[1:]]
+        lv = np.rint(lv[:, :s[0], :s[1], :s[2]].astype(np.float64).reshape(
+            3, s[0] // 2, 2, s[1] // 2, 2, s[2] // 2, 2).mean(axis=(2, 4, 6))).astype(np.uint16)
+    g.attrs["ome"] = {"version": "0.5", "multiscales": [{"axes": [
+        {"name": "c", "type": "channel"}] + [{"name": a, "type": "space"} for a in "zyx"],
+        "datasets": ds}], "omero": {"channels": [
+            {"label": n, "color": c, "window": {"min": 0, "max": 4000, "start": 100,
+                                                 "end": 2500}}
+            for n, c in (("nuclei", "FF0000"), ("actin", "00FF00"), ("dna", "0000FF"))]}}
+    return path
+
+
+def test_widget_channels_out_of_core(make_napari_viewer, qtbot, plugin, out_dir):
+    """A 3-channel store opened by the VolVis reader (one layer a channel, as
+    napari's channel_axis makes them: additive, coloured by the file) under a
+    memory limit that keeps it out of core: the layers share one pyramid whose
+    chunks hold every channel; the dock widget draws them as one object in one
+    pass out of core at full resolution (level 0 nodes, none pending), the
+    status line naming no blending, equal (>= 50 dB) to `volvis render` of the
+    same World and view under the same limit; hiding a layer hides its channel
+    from the frame and reads no chunk again."""
+    store = _channels_store(out_dir / "channels_ooc.ome.zarr")
+    old = volvis.memory_limit()
+    volvis.memory_limit("8M")
+    try:
+        v = make_napari_viewer()
+        layers = v.open(str(store), plugin="volvis")
+        assert [x.name for x in layers] == ["nuclei", "actin", "dna"]
+        pyrs = {id(x.data[0].volvis_level.pyramid) for x in layers}
+        assert len(pyrs) == 1, "the channels' layers read one pyramid"
+        assert all(x.blending == "additive" for x in layers)
+        assert all(x.metadata["volvis"]["out_of_core"] for x in layers)
+        w = _widget_3d(v, (0, 20, 70), 256, reset_view=True)
+        img = _final(qtbot, w, w.finals)
+        f = dict(w.frame)
+        objs = f["world"].objects
+        assert len(objs) == 1 and objs[0]._c.n_channels == 3, "one object of the 3 channels"
+        assert objs[0]._c.source != volvis._volvis.ffi.NULL, "drawn out of core"
+        assert f["lod"]["nodes"][0] > 0 and f["lod"]["pending"] == 0, f["lod"]
+        assert "blending" not in w.status.text(), w.status.text()
+        volvis.save_png(img, str(out_dir / "widget_channels_ooc.png"))
+        ref = _cli_render(f, out_dir, "widget_channels_ooc", [store],
+                          ("--memory-limit", "8M", "--lod", "1"))
+        p = psnr(img, ref)
+        print("3 channels out of core: widget vs volvis render %.1f dB" % p)
+        assert p >= 50, "widget vs volvis render of the channels: %.2f dB" % p
+        # hide "actin" (green): its colour leaves the frame, no chunk read again
+        pyr = layers[0].data[0].volvis_level.pyramid
+        reads = sum(pyr.stats["chunk_reads"])
+        layers[1].visible = False
+        hidden = _final(qtbot, w, w.finals)
+        green = lambda a: float(a[..., 1].astype(np.float64).sum())  # noqa: E731
+        assert green(hidden) < 0.5 * green(img), (green(hidden), green(img))
+        assert sum(pyr.stats["chunk_reads"]) == reads, "hiding a channel read chunks again"
+    finally:
+        volvis.memory_limit(old)

@@ -20,6 +20,9 @@ Checks, each on the real binary:
   - --shared: two clients see the same frames, and either steers the view;
   - one thumbnail a preset; a listing marks the Zarr store; a refused open
     or save answers an error and keeps the connection;
+  - a 3-channel OME-Zarr pyramid (zarr-python) under --memory-limit: its 3 channels
+    out of core, the PNG equals `volvis render` of the saved session with the same
+    limit byte for byte, and hiding a channel changes the frame;
   - a 3-channel OME-TIFF (tifffile) shows its 3 channels, and hiding one or
     changing its colour changes the frame; a 4-D NIfTI of 3 time steps
     (nibabel) has the time slider's 3 steps, and a step changes the frame;
@@ -394,6 +397,51 @@ def main():
         finally:
             srv.stop()
 
+    def channels_out_of_core():
+        """A 3-channel OME-Zarr pyramid (zarr-python's; Zarr v2, OME-Zarr 0.4) under
+        --memory-limit: one object of its 3 channels out of core (every channel of a node
+        read at once), the PNG equal to volvis render of the saved session with the same
+        limit, and a channel hidden reads no chunk again (the out-of-core counts)."""
+        import zarr
+        z, y, x = np.mgrid[0:48, 0:64, 0:96]
+        lv = np.stack([(((x - cx) ** 2 + (y - 32) ** 2 + (z - 24) ** 2 <= 200) * 900 + 40 +
+                        (x + y + z) % 7).astype(np.uint16) for cx in (24, 48, 72)])
+        path = os.path.join(root, "cells.ome.zarr")
+        g = zarr.open_group(zarr.DirectoryStore(path, dimension_separator="/"), mode="w")
+        ds = []
+        for k in range(3):
+            g.create_dataset(str(k), data=lv, chunks=(1, 16, 16, 16), dimension_separator="/")
+            ds.append({"path": str(k), "coordinateTransformations": [
+                {"type": "scale", "scale": [1.0] + [2.0 ** k] * 3}]})
+            lv = lv[:, ::2, ::2, ::2]
+        g.attrs["multiscales"] = [{"version": "0.4", "axes": [
+            {"name": "c", "type": "channel"}] + [{"name": a, "type": "space"} for a in "zyx"],
+            "datasets": ds}]
+        g.attrs["omero"] = {"channels": [{"label": n, "color": c} for n, c in
+                                         (("a", "FF0000"), ("b", "00FF00"), ("c", "0000FF"))]}
+        srv = Server(["--root", root, "--memory-limit", "4M", path])
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 128, "height": 96}))
+                    k, st, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                           h["type"] == "state" and h["dims"], "state")
+                    assert [c["name"] for c in st["channels"]] == ["a", "b", "c"], st["channels"]
+                    first = (await until(ws, sharp, "first frame"))[2]
+                    png = await png_of(ws)
+                    await save(ws, "chooc.json")
+                    await ws.send(json.dumps({"type": "channel", "index": 1, "visible": False}))
+                    hidden = (await until(ws, sharp, "the frame without channel b"))[2]
+                    assert hidden != first, "hiding a channel changed nothing"
+                    return png
+            png = asyncio.run(run())
+            cli = cli_png(os.path.join(root, "chooc.json"), os.path.join(root, "chooc_cli.png"),
+                          ("--memory-limit", "4M", "--lod", "1"))
+            assert png == cli, "the page's PNG of the channels out of core differs from volvis " \
+                               "render of the session"
+        finally:
+            srv.stop()
+
     def foreground_window():
         """The slice views' window of mricron's MNI template (63 % of its voxels a
         background at 0, the brain between 62 and 119) spans the brain: its lower
@@ -486,6 +534,7 @@ def main():
     check("--shared: two clients, one view", shared_session)
     check("thumbnails, the listing's store, refusals keep the connection", thumbnails_listing_errors)
     check("channels (OME-TIFF) and time steps (4-D NIfTI)", channels_and_time)
+    check("channels of a store out of core: PNG equals volvis render", channels_out_of_core)
     check("--cert/--key: HTTPS, 403 without the token, frames over WSS", tls)
     check("the slice window of ch2better.nii.gz spans its brain", foreground_window)
     check("JPEG from YUV 4:2:0 planes at 999 x 799: decodes, within 48 dB of RGB's", yuv_frames)

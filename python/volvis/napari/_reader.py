@@ -14,7 +14,13 @@ its library reader, as the library always reads it.
 
 Each channel is one layer: its name the file's channel name (else the
 file's name and the channel index), its colormap from the file's channel
-colour (black to that colour) when the file has one, its contrast limits
+colour (black to that colour) when the file has one, additive blending.
+The layers of a file of several channels read out of core share ONE
+pyramid of them all (up to 16), each chunk holding every channel (read
+once for all of them; the dock widget draws them as one object), and their
+contrast limits are the channels' as `volvis render` gives them (the omero
+window's start and end, else vv_channel_default_contrast of the coarsest
+level). A file of one channel: its contrast limits
 the library's automatic window (vv_slice_auto_window on the coarsest level
 or the whole volume: the 1st to 99.5th percentile of the foreground),
 scale the voxel spacing and translate the origin of voxel (0, 0, 0), both
@@ -47,12 +53,16 @@ class LevelArray:
     the box asked for (vv_source_read_box through the process's cache), and
     ``__array__`` the whole level. ``pyramid`` is the :class:`volvis.Pyramid`
     it reads (the VolVis dock widget renders from it, out of core, by level
-    of detail); ``level`` its index. Thread-safe (the library's reads are)."""
+    of detail); ``level`` its index; ``channel`` the position in the
+    pyramid's carried channels (the layers of a file's channels share one
+    pyramid whose chunks hold them all). Thread-safe (the library's reads
+    are)."""
 
-    def __init__(self, pyramid, level):
+    def __init__(self, pyramid, level, channel=0):
         lv = pyramid.levels[level]
         self.pyramid = pyramid
         self.level = int(level)
+        self.channel = int(channel)
         self.shape = tuple(int(s) for s in lv.shape)
         self.dtype = np.dtype(lv.dtype)
         self.ndim = 3
@@ -97,16 +107,17 @@ class LevelArray:
         if 0 in shape:
             return np.empty(shape, dtype=self.dtype)
         # (i, j, k) boxes, inclusive
-        block = self.pyramid.read(self.level, lo[::-1], hi[::-1])
+        block = self.pyramid.read(self.level, lo[::-1], hi[::-1], channel=self.channel)
         return block[tuple(post)]
 
     def __array__(self, dtype=None, copy=None):
-        a = self.pyramid.read(self.level)
+        a = self.pyramid.read(self.level, channel=self.channel)
         return a if dtype is None else a.astype(dtype)
 
     def __repr__(self):
-        return "<volvis LevelArray %s level %d of %r, shape %s %s>" % (
-            self.pyramid.kind, self.level, self.pyramid.path, self.shape, self.dtype)
+        return "<volvis LevelArray %s level %d channel %d of %r, shape %s %s>" % (
+            self.pyramid.kind, self.level, self.channel, self.pyramid.path, self.shape,
+            self.dtype)
 
 
 def lazy(level_array):
@@ -124,8 +135,9 @@ def lazy(level_array):
     arr = da.from_array(level_array, chunks=(min(z, 64), min(y, 256), min(x, 256)),
                         asarray=False, fancy=False, lock=False,
                         meta=np.empty((0, 0, 0), dtype=level_array.dtype),
-                        name="volvis-%s-%d-%x" % (os.path.basename(level_array.pyramid.path),
-                                                  level_array.level, id(level_array)))
+                        name="volvis-%s-%d-%d-%x" % (os.path.basename(level_array.pyramid.path),
+                                                     level_array.level, level_array.channel,
+                                                     id(level_array)))
     arr.volvis_level = level_array
     return arr
 
@@ -181,14 +193,39 @@ def get_reader(path):
     return read
 
 
-def _open(path, channel):
+def _open(path, channel, channels=None):
     """vv_open out of core where the file can be: (Pyramid or None, Volume
-    or None, info dict)."""
+    or None, info dict); with ``channels`` (a list of several) a pyramid of
+    them all, or (None, None, None) when the file cannot be read so."""
     oo = ffi.new("vv_open_options *")
     lib.vv_open_options_init(oo)
     oo.mode = lib.VV_OPEN_OUT_OF_CORE
     oo.levels = 1
     oo.load.channel = int(channel)
+    if channels:
+        oo.mode = lib.VV_OPEN_OUT_OF_CORE_ONLY
+        oo.n_channels = len(channels)
+        for i, c in enumerate(channels):
+            oo.channels[i] = c
+        od = ffi.new("vv_opened *")
+        st = _lib.call_long(lambda prog: lib.vv_open(od, cstr(path), oo), None,
+                            allow=(lib.VV_ERR_UNSUPPORTED,))
+        if st == lib.VV_ERR_UNSUPPORTED:
+            return None, None, None
+        try:
+            p = Pyramid._own(od.source, path)
+            p.carried = list(channels)
+            infos = []
+            for i in range(len(channels)):
+                inf = od.ch_info[i]
+                infos.append({"channel_name": pystr(inf.channel_name),
+                              "color": tuple(float(c) for c in inf.color) if inf.has_color
+                              else None,
+                              "window": (float(inf.window[0]), float(inf.window[1]))
+                              if inf.has_window else None})
+            return p, None, infos
+        finally:
+            lib.vv_opened_clear(od)
     od = ffi.new("vv_opened *")
     _lib.call_long(lambda prog: lib.vv_open(od, cstr(path), oo), None)
     try:
@@ -206,6 +243,18 @@ def _open(path, channel):
         return Pyramid._own(od.source, path), None, info
     finally:
         lib.vv_opened_clear(od)
+
+
+def channel_contrast(volume, window):
+    """(lo, hi) of a channel of several: the file's omero window (start, end)
+    when it has one, else vv_channel_default_contrast of ``volume`` (the
+    coarsest level): the contrast `volvis render`, the GUI and the browser
+    give the channel (the door's, src/scene/world_open.c)."""
+    if window is not None:
+        return window
+    lo, hi = ffi.new("double *"), ffi.new("double *")
+    lib.vv_channel_default_contrast(volume._ptr, lo, hi)
+    return (float(lo[0]), float(hi[0]) if hi[0] > lo[0] else float(lo[0]) + 1.0)
 
 
 def auto_contrast(volume):
@@ -238,14 +287,25 @@ def layer_data(path):
     out = []
     first = _open(path, 0)
     n = first[2]["n_channels"]
-    for c in range(n):
-        pyr, vol, info = first if c == 0 else _open(path, c)
+    # a file of several channels out of core: one pyramid whose chunks hold
+    # every channel (up to 16), each layer a channel of it (as napari's
+    # channel_axis makes a layer a channel)
+    shared, infos = None, None
+    if n > 1 and first[0] is not None:
+        shared, _, infos = _open(path, 0, list(range(min(n, lib.VV_MAX_CHANNELS))))
+    for c in range(min(n, lib.VV_MAX_CHANNELS) if shared is not None else n):
+        if shared is not None:
+            pyr, vol, info = shared, None, dict(first[2], **infos[c])
+        else:
+            pyr, vol, info = first if c == 0 else _open(path, c)
         if pyr is not None:
+            k = c if shared is not None else 0
             levels = pyr.levels
-            data = [lazy(LevelArray(pyr, L)) for L in range(len(levels))]
+            data = [lazy(LevelArray(pyr, L, k)) for L in range(len(levels))]
             spacing, origin = levels[0].spacing, levels[0].origin
-            contrast = auto_contrast(pyr.proxy())
-            direction = np.asarray(pyr.proxy().direction)
+            contrast = channel_contrast(pyr.proxy(k), info.get("window")) if shared is not None \
+                else auto_contrast(pyr.proxy(k))
+            direction = np.asarray(pyr.proxy(k).direction)
         else:
             data = [vol.array]
             spacing, origin = vol.spacing, vol.origin

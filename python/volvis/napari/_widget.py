@@ -29,6 +29,14 @@ What it maps (napari -> VolVis, each layer one volume object of a World):
   130 points over the contrast limits (even in t and in t^gamma), colour ``colormap((t)^gamma)`` at data
   value ``lo + t (hi - lo)``; opacity there ``opacity * t^gamma`` per voxel
   (the smallest spacing) in composite, ``opacity`` in mip, minip and xray.
+- channels: the layers of one file's channels opened by the VolVis reader
+  (one pyramid whose chunks hold every channel) drawn in composite or mip
+  become ONE multi-channel object out of core, drawn in one pass: each
+  shown layer its channel with its transfer function, additive layers
+  under VolVis's ``additive`` rule (composite) or ``maximum`` rule (mip),
+  as napari adds them, translucent ones under the ``composite`` rule; a
+  channel layer drawn otherwise (iso, minip, average, attenuated_mip) is
+  an object of its own over a pyramid of that channel.
 - blending: ``additive`` layers held in memory on the same grid (shape,
   scale, translate) and drawn in mip, or in translucent, are combined by
   their sum, as napari adds them: they become the channels of one
@@ -195,6 +203,48 @@ def additive_object(objs, names):
     return base
 
 
+def channels_object(pyr, layers):
+    """One :class:`volvis.VolumeObject` of the channels of ``pyr`` (a
+    :class:`volvis.Pyramid` carrying several, the VolVis reader's layers of
+    one file's channels: each chunk holds them all) drawn by ``layers``
+    (napari Image layers of them, composite or mip), out of core in one pass:
+    a channel is shown when one of the layers shows it, with that layer's
+    transfer function (:func:`layer_tf`); additive layers combine by
+    VolVis's additive rule (composite: each channel composited alone, the
+    colours added) or maximum rule (mip: a MIP per channel, the coloured
+    maxima added), as napari adds them; translucent ones by the composite
+    rule (the channels mixed sample by sample). ``scale`` and ``translate``
+    from the first layer."""
+    first = layers[0]
+    obj = pyr.object(name="+".join(layer.name for layer in layers)[:60])
+    lv = pyr.levels[0]
+    scale = np.asarray(first.scale, dtype=float)[-3:][::-1]
+    translate = np.asarray(first.translate, dtype=float)[-3:][::-1]
+    sp, org = np.asarray(lv.spacing, dtype=float), np.asarray(lv.origin, dtype=float)
+    factor = scale / sp
+    if not np.allclose(factor, 1.0) or not np.allclose(translate, org):
+        obj.scale = tuple(factor)
+        obj.position = tuple(translate - factor * org)
+    c = obj._c
+    for k in range(c.n_channels):
+        c.channels[k].visible = 0
+    modes, blends = set(), set()
+    for layer in layers:
+        k = level_array(layer.data[0] if layer.multiscale else layer.data).channel
+        mode, tf, _, _ = layer_tf(layer, float(np.min(scale)))
+        c.channels[k].tf = tf._value()
+        c.channels[k].visible = 1
+        modes.add(mode)
+        blends.add(_blending(layer))
+    mode = modes.pop() if len(modes) == 1 else "composite"
+    if blends == {"additive"}:
+        c.blend = _ADDITIVE_RULES[mode]
+    else:
+        c.blend = lib.VV_BLEND_MAXIMUM if mode == "mip" else lib.VV_BLEND_COMPOSITE
+    obj.shading = False
+    return obj
+
+
 def layer_object(layer, cache=None):
     """A :class:`volvis.VolumeObject` showing napari Image ``layer`` (3-D)
     as the module docstring says; ``cache`` (a dict) keeps in-memory
@@ -204,7 +254,26 @@ def layer_object(layer, cache=None):
     translate = np.asarray(layer.translate, dtype=float)[-3:][::-1]
     pyr = None
     la = level_array(data)
-    if la is not None:
+    if la is not None and len(la.pyramid.carried) > 1:
+        # one channel of a pyramid of several, drawn alone (an iso, minip,
+        # xray or attenuated-mip layer): a pyramid of that channel
+        key = ("channel", id(la.pyramid), la.channel)
+        one = cache.get(key) if cache is not None else None
+        if one is None or one[0] is not la.pyramid:
+            one = (la.pyramid, volvis.Pyramid(la.pyramid.path,
+                                              channel=la.pyramid.carried[la.channel]))
+            if cache is not None:
+                cache[key] = one
+        pyr = one[1]
+        obj = pyr.object(name=layer.name[:60])
+        lv = pyr.levels[0]
+        sp, org = np.asarray(lv.spacing, dtype=float), np.asarray(lv.origin, dtype=float)
+        factor = scale / sp
+        if not np.allclose(factor, 1.0) or not np.allclose(translate, org):
+            obj.scale = tuple(factor)
+            obj.position = tuple(translate - factor * org)
+        spacing = scale
+    elif la is not None:
         pyr = la.pyramid
         obj = pyr.object(name=layer.name[:60])
         lv = pyr.levels[0]
@@ -382,12 +451,19 @@ class VolVisWidget(QWidget):
         pyramids, notes = [], []
         out_of_core = set()  # the names of the objects drawn from a pyramid
         additive = {}  # (mode, grid) -> [(layer name, object)]: summed layers
+        channels = {}  # id(pyramid) -> (pyramid, [layers]): a file's channels, one object
         blend_notes = []
         for layer in self.viewer.layers:
             if not isinstance(layer, Image) or not layer.visible or layer.rgb:
                 continue
             if layer.ndim != 3:
                 notes.append("%s: %d-D, not drawn" % (layer.name, layer.ndim))
+                continue
+            la = level_array(layer.data[0] if layer.multiscale else layer.data)
+            if la is not None and len(la.pyramid.carried) > 1 and \
+                    _MODES.get(str(getattr(layer.rendering, "value", layer.rendering))) in \
+                    _ADDITIVE_RULES:
+                channels.setdefault(id(la.pyramid), (la.pyramid, []))[1].append(layer)
                 continue
             obj, pyr, note = layer_object(layer, self._cache)
             if note:
@@ -406,6 +482,14 @@ class VolVisWidget(QWidget):
             if blending not in ("translucent",):
                 blend_notes.append("%s: blending %s drawn by VolVis's rule"
                                    % (layer.name, blending))
+        for pyr, layers in channels.values():  # one pass over every channel shown
+            obj = channels_object(pyr, layers)
+            world.add(obj)
+            pyramids.append(pyr)
+            out_of_core.add(obj.name)
+            if len(layers) > 1 and len({_blending(x) for x in layers}) > 1:
+                blend_notes.append("%s: blendings %s drawn by VolVis's composite rule"
+                                   % (obj.name, "/".join(sorted({_blending(x) for x in layers}))))
         for group in additive.values():
             if len(group) == 1 or len(group) > lib.VV_MAX_CHANNELS:
                 for name, obj in group:
