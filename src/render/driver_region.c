@@ -886,13 +886,53 @@ channel0_range(void *user, const int lo[3], const int hi[3], float *vmin, float 
     return c->src->channel_range(c->src->user, c->channel, 0, lo, hi, vmin, vmax);
 }
 
-/* dc_voxels, and the node's whole volume for the pass: the channel's
- * (split passes draw it as an object of one channel), or every channel's. */
+/* Whether drawn channel @p k of the object is transparent in node @p nd
+ * (its range there, as the source knows it, shows nothing under its
+ * transfer function); never under the maximum rule, nor for a renderer
+ * with global effects (the ray tracer's shadows through a channel come
+ * from all of it, with the tables of its part in each region). */
+static int
+mr_channel_hidden(const mr_frame *f, const mr_node *nd, int k) {
+    const vv_channel *ch = &f->obj->channels[k];
+    float vmin, vmax;
+    return f->skip && !ch->labels && !(f->r->ops->info.caps & VV_RENDERER_GLOBAL) &&
+           f->src->channel_range(f->src->user, k, nd->level, nd->lo, nd->hi, &vmin, &vmax) &&
+           !(tf_max_opacity(&ch->tf, vmin - f->cbin[k], vmax) > 0);
+}
+
+/* The channels of node @p nd a region render takes (@p vols with the
+ * channels transparent there left out, into @p out). */
 static void
+mr_node_channels(const mr_frame *f, const mr_node *nd, vv_volume *const *vols, vv_volume **out) {
+    for (int k = 0; k < f->obj->n_channels; k++)
+        out[k] = vols[k] && !mr_channel_hidden(f, nd, k) ? vols[k] : NULL;
+}
+
+/* dc_voxels, and the node's whole volume for the pass: the channel's
+ * (split passes draw it as an object of one channel), or every channel's.
+ * @p vols: the node's channels (mr_node_channels: those transparent there
+ * left out). Returns 0 when the pass draws nothing here (its channel, or
+ * every channel, transparent in the node). */
+static int
 mr_voxels(const mr_frame *f, vv_render_region *rg, vv_volume *const *vols, int p) {
+    if (f->dc.split && !vols[f->dc.drawn[p]])
+        return 0;
+    if (f->dc.multi && !f->dc.split) {
+        int any = 0;
+        for (int d = 0; d < f->dc.n_drawn; d++)
+            any |= vols[f->dc.drawn[d]] != NULL;
+        if (!any)
+            return 0;
+    }
     dc_voxels(&f->dc, rg, vols, p);
+    if (f->dc.multi && !f->dc.split)
+        for (int d = 0; d < f->dc.n_drawn; d++) /* the first channel drawn here */
+            if (vols[f->dc.drawn[d]]) {
+                rg->voxels = vols[f->dc.drawn[d]];
+                break;
+            }
     if (!f->have_cwhole)
-        return;
+        return 1;
     if (f->dc.split) {
         rg->whole = &f->cwhole[f->dc.drawn[p]];
         rg->channel_whole = NULL;
@@ -900,6 +940,7 @@ mr_voxels(const mr_frame *f, vv_render_region *rg, vv_volume *const *vols, int p
         rg->whole = NULL;
         rg->channel_whole = f->cwhole;
     }
+    return 1;
 }
 
 /* A node's voxels at its level: every channel's (vols in object channel
@@ -1238,8 +1279,12 @@ render_nodes_concurrent(mr_frame *f, int T) {
             __atomic_store_n(&next_read, i + 1, __ATOMIC_RELEASE);
             pthread_cond_broadcast(&turn);
             pthread_mutex_unlock(&turn_lock);
+            vv_volume *use[VV_MAX_CHANNELS] = {NULL};
+            if (draw && ns == VV_OK && f->dc.multi)
+                mr_node_channels(f, nd, vols, use);
             for (int p = 0; draw && ns == VV_OK && p < npass; p++) {
-                mr_voxels(f, &nd->rg, vols, p);
+                if (!mr_voxels(f, &nd->rg, f->dc.multi ? use : vols, p))
+                    continue; /* nothing of its channel here: the piece stays clear */
                 const vv_region_image *wh = f->dc.split ? &f->wholes[p] : f->whole;
                 ns = render_into(rs[t], dc_world(&f->dc, f->w, p), f->view, &nd->rg, &o,
                                  &pieces[t][p], wh->op);
@@ -1323,8 +1368,12 @@ render_nodes(mr_frame *f) {
         if (s != VV_OK)
             return s;
         nd->rg.rays = f->rays;
+        vv_volume *use[VV_MAX_CHANNELS] = {NULL};
+        if (f->dc.multi)
+            mr_node_channels(f, nd, vols, use);
         for (int p = 0; p < f->dc.npass && s == VV_OK; p++) {
-            mr_voxels(f, &nd->rg, vols, p);
+            if (!mr_voxels(f, &nd->rg, f->dc.multi ? use : vols, p))
+                continue; /* nothing of its channel here */
             s = render_piece(f->r, dc_world(&f->dc, f->w, p), f->view, &nd->rg, f->opt, f->piece,
                              f->dc.split ? &f->wholes[p] : f->whole);
         }

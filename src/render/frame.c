@@ -431,16 +431,18 @@ vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_o
         vv_channel *c = malloc(sizeof *c * (size_t)obj->n_channels);
         if (!c)
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        int shown = 0;
         for (int k = 0; k < obj->n_channels; k++) {
             c[k] = obj->channels[k];
             c[k].volume = (vv_volume *)rg->channel_voxels[k];
-            if (c[k].visible && !c[k].volume) {
-                free(c);
-                return vv_error_set(VV_ERR_INVALID,
-                                    "object '%s': channel %d is drawn but the region has no "
-                                    "voxels of it",
-                                    obj->name, k);
-            }
+            c[k].visible &= c[k].volume != NULL; /* none: nothing of it here */
+            shown += c[k].visible;
+        }
+        if (!shown) {
+            free(c);
+            return vv_error_set(VV_ERR_INVALID,
+                                "object '%s': the region has the voxels of no channel shown",
+                                obj->name);
         }
         part->channels = c;
         *chan = c;

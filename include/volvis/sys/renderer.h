@@ -208,7 +208,8 @@ typedef struct vv_render_region {
      * channels under the composite rule): channel_voxels[c] the voxels of
      * the object's channel c over the same box as `voxels` (which is the
      * first drawn channel's), each with that channel's value range; NULL
-     * for a channel not drawn. NULL (an initializer's default): an object
+     * for a channel not drawn here (hidden, or transparent throughout the
+     * region: its samples are not taken). NULL (an initializer's default): an object
      * of one channel. The additive and maximum rules combine the channels
      * only after each is composited or projected along the whole ray, so a
      * driver draws such an object a channel at a time, each channel an
