@@ -944,6 +944,40 @@ vv_status vv_world_new_for_source(vv_world **out, vv_source *source, int level,
                                   const vv_default_scene_options *opt);
 
 /**
+ * Gives volume object @p obj the appearance the default scene gives a file
+ * opened alone (docs/scene-format.md, "Default scene"), for the object's
+ * own mode: the transfer function of vv_tf_default from the histogram of
+ * @p histogram (NULL: the object's volume; a pyramid's coarsest level, so
+ * that a store looks the same read whole or out of core), its
+ * opacity_unit_distance the smallest voxel spacing of @p shown (NULL: the
+ * object's volume; out of core the level drawn, vv_source_level, not the
+ * proxy's), and the isovalue and threshold at the ramp's low end. What
+ * vv_world_new_for_volume, vv_world_open and scene files whose objects
+ * give no transfer function use. Does nothing to other objects (NULL, not
+ * a volume). Not thread-safe on the same object.
+ */
+void vv_object_default_appearance(vv_object *obj, const vv_volume *histogram,
+                                  const vv_volume *shown);
+
+/**
+ * Points and frames @p w's view as vv_world_new_for_volume does, on the
+ * World as it is: perspective, fov 30°, up +z, from the front of the first
+ * visible volume object's volume (-y for VV_SPACE_LPS, else +y; a single
+ * slice face on), or from -y when there is none (grids, geometry); framed
+ * on vv_world_bounds (vv_view_frame_box) at the view's own image size,
+ * orbited by @p opt's azimuth and elevation, the eye distance divided by
+ * its zoom, ortho_height the height of the view at its centre. For a World
+ * of one volume object this is the default scene's view of its file. With
+ * @p headlight, also adds the default scene's white headlight of intensity 1.
+ * Objects, ambient and background are left as they are. @p opt may be
+ * NULL (no rotation, zoom 1; its mode, size and ranges are not used).
+ * Errors: VV_ERR_INVALID (NULL, bad zoom or angles), VV_ERR_LIMIT (no room
+ * for a light).
+ */
+vv_status vv_world_fit_default_view(vv_world *w, const vv_default_scene_options *opt,
+                                    int headlight);
+
+/**
  * A World showing one irregular grid, the grid counterpart of
  * vv_world_new_for_volume: a grid object (vv_object_new_grid) showing
  * @p field (NULL: the first scalar field, else the first field) at time
@@ -969,8 +1003,8 @@ vv_status vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field
  * histogram's background peak left out: 2 % to 99.5 % of the remaining
  * count); unit distance vv_tf_default_unit_distance.
  * Fills @p tf and stores the composite ramp's lower end in *@p iso_lo (may
- * be NULL), a default isovalue. What vv_world_new_for_volume and scene files
- * without a "transfer_function" use. Never fails; thread-safe.
+ * be NULL), a default isovalue. What vv_object_default_appearance uses.
+ * Never fails; thread-safe.
  */
 void vv_tf_default(vv_tf *tf, const vv_volume *v, vv_render_mode mode, double *iso_lo);
 

@@ -6,7 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "core/internal.h"
@@ -30,14 +29,15 @@ atomic_open_failed(vv_atomic_file *af, const char *path, int err) {
     return s;
 }
 
-/* A name beside @p path for the temporary file: "<path>.tmp-XXXXXX". */
+/* Room for what vv_tmp_name adds to a path (".tmp-" and the owner). */
+#define TMP_SUFFIX_MAX 64
+
+/* A name beside the target for the temporary file, naming this process
+ * (vv_tmp_name). */
 static void
 tmp_name(const vv_atomic_file *af, size_t cap, int attempt) {
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    unsigned r = (unsigned)getpid() * 2654435761u ^ (unsigned)ts.tv_nsec ^
-                 (unsigned)(uintptr_t)af * 40503u ^ ((unsigned)attempt << 20);
-    snprintf(af->tmp_path, cap, "%s.tmp-%06x", af->path, r & 0xFFFFFFu);
+    (void)vv_tmp_name(af->tmp_path, cap, af->path, (long)getpid(),
+                      (unsigned)attempt ^ (unsigned)(uintptr_t)af);
 }
 
 vv_status
@@ -46,7 +46,7 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
     af->fd = -1;
     size_t n = strlen(path);
     af->path = vv_strdup(path);
-    af->tmp_path = malloc(n + 16);
+    af->tmp_path = malloc(n + TMP_SUFFIX_MAX);
     if (!af->path || !af->tmp_path) {
         free(af->path);
         free(af->tmp_path);
@@ -55,6 +55,8 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
     af->tmp_path[0] = '\0';
+    /* the named temporaries of writers of this target that were killed */
+    (void)vv_tmp_sweep(path);
     /* First choice: an unnamed file in the target's folder (O_TMPFILE), given
      * a name only at commit, so a process killed mid-write leaves nothing
      * behind. Where the file system cannot (EOPNOTSUPP, EISDIR on old
@@ -84,7 +86,7 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
     }
 #endif
     for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
-        tmp_name(af, n + 16, attempt);
+        tmp_name(af, n + TMP_SUFFIX_MAX, attempt);
         fd = open(af->tmp_path, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd < 0 && errno != EEXIST)
             break;
@@ -110,7 +112,7 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
 /* Gives the unnamed file a temporary name beside the target, for rename. */
 static int
 link_anonymous(vv_atomic_file *af) {
-    size_t cap = strlen(af->path) + 16;
+    size_t cap = strlen(af->path) + TMP_SUFFIX_MAX;
     char proc[64];
     snprintf(proc, sizeof proc, "/proc/self/fd/%d", af->fd);
     for (int attempt = 0; attempt < 100; attempt++) {

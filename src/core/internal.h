@@ -11,13 +11,50 @@
 #include "volvis/volume.h"
 
 /**
+ * The name of a temporary beside @p path made by process @p pid (a file or
+ * a folder that a writer renames over @p path when done), into @p buf of
+ * @p cap bytes: "<path>.tmp-<host>-<pid>-<start>-<random>", <host> 8 hex
+ * digits hashing the host's name and the PID namespace, <start> the
+ * process's start time (clock ticks after boot, /proc/PID/stat; 0 where
+ * unknown), <random> 6 hex digits varied by @p attempt (a writer retries
+ * on EEXIST). The owner in the name lets vv_tmp_sweep tell a temporary of
+ * a writer that is gone from one still being written. Returns 0, or -1
+ * when it does not fit. Reentrant.
+ */
+int vv_tmp_name(char *buf, size_t cap, const char *path, long pid, unsigned attempt);
+
+/**
+ * 1 when directory entry @p name is a temporary of target base name
+ * @p base as vv_tmp_name makes them, with its owner in *@p host, *@p pid
+ * (> 0) and *@p start; 0 for any other name (left alone by the sweep).
+ */
+int vv_tmp_parse(const char *name, const char *base, uint32_t *host, long *pid,
+                 unsigned long long *start);
+
+/**
+ * Removes the temporaries of @p path left by writers that are gone: every
+ * entry of @p path's folder named as vv_tmp_name names them, made on this
+ * host and PID namespace, owned by this user, on the folder's file system,
+ * whose writer process no longer runs (no such process, a zombie, or a
+ * process of another start time that took its id since). Files are
+ * unlinked; folders removed with what they hold, through file descriptors
+ * (openat with O_NOFOLLOW: a symbolic link inside is removed, never
+ * followed; nothing on another file system). Temporaries of running
+ * writers (this process's among them) and every other name are left as
+ * they are. Best effort, for litter only: failures are ignored. Returns
+ * how many temporaries it removed. Called when a writer opens @p path.
+ */
+int vv_tmp_sweep(const char *path);
+
+/**
  * An output file written atomically: the data goes to an unnamed file in
  * the target's folder (O_TMPFILE; where the file system cannot, a temporary
- * file beside it, "<path>.tmp-XXXXXX"), linked and renamed over the target
+ * file beside it named by vv_tmp_name), linked and renamed over the target
  * only by vv_atomic_file_commit after fsync. On any failure call
  * vv_atomic_file_abort: the target is untouched and no temporary file is
- * left; a process killed mid-write leaves none either (but for the named
- * fallback). Write through fp, or through fd (then fp must stay unused);
+ * left; a process killed mid-write leaves none either but for the named
+ * fallback, which the next vv_atomic_file_open of the same target removes
+ * (vv_tmp_sweep). Write through fp, or through fd (then fp must stay unused);
  * the descriptor reads too (libtiff reads back what it wrote).
  */
 typedef struct vv_atomic_file {

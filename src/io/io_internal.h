@@ -89,9 +89,10 @@ vv_status vv_vti_write(const vv_volume *v, const char *path, int compress);
  * level's scale (spacing x factor) and translation (origin, shifted to the
  * centre of the averaged voxels), omero (one channel, the value range as
  * its window), image-label for labels. No direction matrix (the record's
- * fits says so). Atomic: written into "<path>.tmp-XXXXXX", synced, then
- * renamed into place or exchanged with an old store (an existing path that
- * is not a Zarr store is refused and left as it is). Chunks are written on
+ * fits says so). Atomic: written into "<path>.tmp-<owner>" (vv_tmp_name),
+ * synced, then renamed into place or exchanged with an old store (an
+ * existing path that is not a Zarr store is refused and left as it is);
+ * temporaries of writers of @p path that were killed are removed first. Chunks are written on
  * every core. @p opt may be NULL. Errors: VV_ERR_INVALID (no data, a
  * non-positive spacing), VV_ERR_UNSUPPORTED (a float label volume), VV_ERR_IO
  * (nothing is left behind), VV_ERR_NOMEM.

@@ -2,7 +2,10 @@
  * The default scene for one volume (what `volvis render FILE` shows): the
  * volume centred on the origin, a framed perspective view from the front, a
  * headlight and a transfer function derived from the histogram. The rule is
- * documented in docs/scene-format.md, "Default scene".
+ * documented in docs/scene-format.md, "Default scene". Its parts serve scene
+ * files too: an object without an appearance of its own
+ * (vv_object_default_appearance) and a scene without a view
+ * (vv_world_fit_default_view) get what the file opened alone gets.
  */
 #include <math.h>
 #include <stdio.h>
@@ -273,12 +276,61 @@ vv_tf_default(vv_tf *tf, const vv_volume *v, vv_render_mode mode, double *iso_lo
         *iso_lo = lo;
 }
 
-/* The default scenes' common end: the view (already pointed along its
- * axis) framed on the World's bounds, orbited and zoomed as @p opt asks,
- * with the orthographic height of the same extent; a white headlight,
- * white ambient light, black background. */
+void
+vv_object_default_appearance(vv_object *obj, const vv_volume *histogram, const vv_volume *shown) {
+    if (!obj || obj->type != VV_OBJECT_VOLUME || !obj->volume)
+        return;
+    double iso_lo;
+    vv_tf_default(&obj->tf, histogram ? histogram : obj->volume, obj->mode, &iso_lo);
+    obj->tf.opacity_unit_distance = vv_tf_default_unit_distance(shown ? shown : obj->volume);
+    obj->isovalue = iso_lo;
+    obj->threshold = iso_lo;
+}
+
+/* The default view's axes for @p volume: perspective, fov 30 degrees,
+ * looking at the origin from the front of the patient (or face on at a
+ * single slice), up +z; framed later. */
 static void
-finish_default_view(vv_world *w, const vv_default_scene_options *opt) {
+volume_view_axes(vv_view *v, const vv_volume *volume) {
+    v->projection = VV_PROJECTION_PERSPECTIVE;
+    v->fov = vv_deg_to_rad(30.0);
+    /* In front of the patient: anterior is -y in LPS and +y in RAS; data
+     * without a known frame (most CT and MRI exports, e.g. the InVesalius
+     * head) are far more often RAS-like, so +y is the default. */
+    v->eye = vv_vec3_make(0, volume->space == VV_SPACE_LPS ? -1 : 1, 0);
+    v->at = vv_vec3_make(0, 0, 0);
+    v->up = vv_vec3_make(0, 0, 1);
+    /* a single slice (a 2-D image) is looked at face on, along its one-voxel
+     * axis (as seen through the direction matrix), not edge on */
+    for (int a = 0; a < 3; a++)
+        if (volume->dims[a] == 1 && volume->dims[(a + 1) % 3] > 1 &&
+            volume->dims[(a + 2) % 3] > 1) {
+            const double *d = volume->direction;
+            vv_vec3 axis = vv_vec3_make(d[a], d[3 + a], d[6 + a]);
+            int b = (a + 1) % 3; /* the slice's first in-plane axis gives "up" */
+            v->eye = axis;
+            v->up = vv_vec3_make(d[b + 3 * 0], d[b + 3 * 1], d[b + 3 * 2]);
+            if (a == 2) /* z-slices: x right, y up, as an image is shown */
+                v->up = vv_vec3_make(d[1], d[4], d[7]);
+            break;
+        }
+}
+
+/* The default view of a grid (and of a World without a volume): from -y, up +z. */
+static void
+grid_view_axes(vv_view *v) {
+    v->projection = VV_PROJECTION_PERSPECTIVE;
+    v->fov = vv_deg_to_rad(30.0);
+    v->eye = vv_vec3_make(0, -1, 0);
+    v->at = vv_vec3_make(0, 0, 0);
+    v->up = vv_vec3_make(0, 0, 1);
+}
+
+/* The view (already pointed along its axis) framed on the World's bounds,
+ * orbited and zoomed as @p opt asks, with the orthographic height of the
+ * same extent. */
+static void
+frame_default_view(vv_world *w, const vv_default_scene_options *opt) {
     vv_view *v = &w->view;
     vv_view_frame_box(v, vv_world_bounds(w));
     vv_view_orbit(v, opt->azimuth, opt->elevation);
@@ -286,17 +338,55 @@ finish_default_view(vv_world *w, const vv_default_scene_options *opt) {
     v->eye = vv_vec3_add(v->at, vv_vec3_scale(off, 1.0 / opt->zoom));
     /* a view of the same extent if the user switches to orthographic */
     v->ortho_height = 2.0 * vv_vec3_length(off) / opt->zoom * tan(0.5 * v->fov);
+}
 
+/* A white headlight of intensity 1 along the view. */
+static vv_status
+add_headlight(vv_world *w) {
     vv_light light;
     memset(&light, 0, sizeof light);
     light.type = VV_LIGHT_DIRECTIONAL;
     light.headlight = 1;
-    light.direction = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
+    light.direction = vv_vec3_normalize(vv_vec3_sub(w->view.at, w->view.eye));
     light.color = vv_vec3_make(1, 1, 1);
     light.intensity = 1.0;
-    (void)vv_world_add_light(w, &light);
+    return vv_world_add_light(w, &light);
+}
+
+/* The default scenes' common end: the view framed (frame_default_view); a
+ * white headlight, white ambient light, black background. */
+static void
+finish_default_view(vv_world *w, const vv_default_scene_options *opt) {
+    frame_default_view(w, opt);
+    (void)add_headlight(w);
     w->ambient = vv_vec3_make(1, 1, 1);
     w->background = vv_vec3_make(0, 0, 0);
+}
+
+vv_status
+vv_world_fit_default_view(vv_world *w, const vv_default_scene_options *opt, int headlight) {
+    if (!w)
+        return vv_error_set(VV_ERR_INVALID, "default view: NULL world");
+    vv_default_scene_options defaults;
+    if (!opt) {
+        vv_default_scene_options_init(&defaults);
+        opt = &defaults;
+    }
+    if (!(opt->zoom > 0.0) || !isfinite(opt->zoom) || !isfinite(opt->azimuth) ||
+        !isfinite(opt->elevation))
+        return vv_error_set(VV_ERR_INVALID, "default view: bad zoom or angles");
+    const vv_volume *first = NULL;
+    for (int i = 0; i < w->n_objects && !first; i++) {
+        const vv_object *o = w->objects[i];
+        if (o && o->visible && o->type == VV_OBJECT_VOLUME && o->volume)
+            first = o->volume;
+    }
+    if (first)
+        volume_view_axes(&w->view, first);
+    else
+        grid_view_axes(&w->view);
+    frame_default_view(w, opt);
+    return headlight ? add_headlight(w) : VV_OK;
 }
 
 vv_status
@@ -338,17 +428,17 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
         return vv_error_prefix(st, "default scene");
     }
     o->mode = opt->mode;
-    double iso_lo;
-    vv_tf_default(&o->tf, volume, opt->mode, &iso_lo);
+    vv_object_default_appearance(o, NULL, NULL);
     if (opt->has_tf_range) {
         double unit = vv_tf_default_unit_distance(volume);
         if (is_projection_mode(opt->mode))
             grey_tf(&o->tf, opt->tf_lo, opt->tf_hi, unit);
         else
             composite_tf(&o->tf, opt->tf_lo, opt->tf_hi, unit);
-        iso_lo = opt->tf_lo;
+        o->isovalue = opt->tf_lo;
     }
-    o->isovalue = opt->has_isovalue ? opt->isovalue : iso_lo;
+    if (opt->has_isovalue)
+        o->isovalue = opt->isovalue;
     o->threshold = o->isovalue;
 
     /* centre the volume's own world box on the origin */
@@ -364,28 +454,7 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
     vv_view *v = &w->view;
     v->width = opt->width;
     v->height = opt->height;
-    v->projection = VV_PROJECTION_PERSPECTIVE;
-    v->fov = vv_deg_to_rad(30.0);
-    /* In front of the patient: anterior is -y in LPS and +y in RAS; data
-     * without a known frame (most CT and MRI exports, e.g. the InVesalius
-     * head) are far more often RAS-like, so +y is the default. */
-    v->eye = vv_vec3_make(0, volume->space == VV_SPACE_LPS ? -1 : 1, 0);
-    v->at = vv_vec3_make(0, 0, 0);
-    v->up = vv_vec3_make(0, 0, 1);
-    /* a single slice (a 2-D image) is looked at face on, along its one-voxel
-     * axis (as seen through the direction matrix), not edge on */
-    for (int a = 0; a < 3; a++)
-        if (volume->dims[a] == 1 && volume->dims[(a + 1) % 3] > 1 &&
-            volume->dims[(a + 2) % 3] > 1) {
-            const double *d = volume->direction;
-            vv_vec3 axis = vv_vec3_make(d[a], d[3 + a], d[6 + a]);
-            int b = (a + 1) % 3; /* the slice's first in-plane axis gives "up" */
-            v->eye = axis;
-            v->up = vv_vec3_make(d[b + 3 * 0], d[b + 3 * 1], d[b + 3 * 2]);
-            if (a == 2) /* z-slices: x right, y up, as an image is shown */
-                v->up = vv_vec3_make(d[1], d[4], d[7]);
-            break;
-        }
+    volume_view_axes(v, volume);
     finish_default_view(w, opt);
     *out = w;
     return VV_OK;
@@ -494,11 +563,7 @@ vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time
     vv_view *v = &w->view;
     v->width = opt->width;
     v->height = opt->height;
-    v->projection = VV_PROJECTION_PERSPECTIVE;
-    v->fov = vv_deg_to_rad(30.0);
-    v->eye = vv_vec3_make(0, -1, 0);
-    v->at = vv_vec3_make(0, 0, 0);
-    v->up = vv_vec3_make(0, 0, 1);
+    grid_view_axes(v);
     finish_default_view(w, opt);
     *out = w;
     return VV_OK;

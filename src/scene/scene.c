@@ -301,6 +301,20 @@ parse_scene(const sctx *c, json_t *root, vv_world *w) {
                 return st;
         }
     }
+    /* no view: the one the file opened alone gets (for several objects,
+     * framing them all), with its headlight when no lights are given */
+    if (!view && w->n_objects > 0) {
+        if (c->over && c->over->width > 0 && c->over->height > 0) {
+            w->view.width = c->over->width;
+            w->view.height = c->over->height;
+        }
+        if ((st = vv_world_fit_default_view(w, NULL, !lights)) != VV_OK)
+            return vv_error_prefix(st, "%s", c->path);
+        const vv_vec3 dir = vv_vec3_normalize(vv_vec3_sub(w->view.at, w->view.eye));
+        for (int i = 0; i < w->n_lights; i++)
+            if (w->lights[i].headlight)
+                w->lights[i].direction = dir;
+    }
     return VV_OK;
 }
 
@@ -323,6 +337,13 @@ vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progre
 vv_status
 vv_scene_load_open(vv_world **out, const char *path, const vv_progress *progress,
                    vv_filter_cache *cache, const vv_open_options *open) {
+    return vv_scene_load_for(out, path, progress, cache, open, NULL);
+}
+
+vv_status
+vv_scene_load_for(vv_world **out, const char *path, const vv_progress *progress,
+                  vv_filter_cache *cache, const vv_open_options *open,
+                  const scene_overrides *over) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "scene: NULL output");
     *out = NULL;
@@ -334,7 +355,7 @@ vv_scene_load_open(vv_world **out, const char *path, const vv_progress *progress
     if (st != VV_OK)
         return vv_error_prefix(st, "scene");
     scene_sources *shared = calloc(1, sizeof *shared); /* NULL: each object its own */
-    sctx c = {path, (const char *)data, (size_t)size, progress, cache, open, shared};
+    sctx c = {path, (const char *)data, (size_t)size, progress, cache, open, shared, over};
     json_error_t jerr;
     json_t *root = json_loadb((const char *)data, (size_t)size,
                               JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &jerr);

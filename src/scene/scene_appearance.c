@@ -494,9 +494,12 @@ parse_scale(const sctx *c, json_t *e, const char *op, vv_object *o) {
 }
 
 /* The segmentation (a 1-D or 2-D transfer function, a threshold, labels),
- * the textures, the material and the local cut planes. */
+ * the textures, the material and the local cut planes. @p fd: the
+ * defaults of an object of a file without an appearance of its own
+ * (NULL: none); @p has_iso: an "isovalue" was given. */
 static vv_status
-parse_segmentation(const sctx *c, json_t *e, const char *op, vv_object *o) {
+parse_segmentation(const sctx *c, json_t *e, const char *op, vv_object *o,
+                   const scene_file_defaults *fd, int has_iso) {
     vv_status st;
     char kp[PATH_MAX_LEN];
     json_t *tfj, *seg = NULL, *mat, *cuts, *tf2j, *texj, *soj;
@@ -558,6 +561,18 @@ parse_segmentation(const sctx *c, json_t *e, const char *op, vv_object *o) {
         vv_scene_path_key(kp, op, "transfer_function");
         if ((st = parse_tf(c, tfj, kp, o)) != VV_OK)
             return st;
+    } else if (o->volume && fd) {
+        /* what the file opened alone shows, for the object's mode (known
+         * only now; the door's when it sets every object's), its isovalue
+         * unless one is given */
+        const double iso = o->isovalue;
+        const vv_render_mode mode = o->mode;
+        if (c->over && c->over->has_mode)
+            o->mode = c->over->mode;
+        vv_object_default_appearance(o, fd->histogram, fd->shown);
+        o->mode = mode; /* the door sets its own after loading */
+        if (has_iso)
+            o->isovalue = o->threshold = iso;
     } else if (o->volume) {
         /* the default TF depends on the mode, known only now */
         double iso_lo;
@@ -590,7 +605,8 @@ parse_segmentation(const sctx *c, json_t *e, const char *op, vv_object *o) {
 
 /* Object fields other than the volume source (file, origin, spacing). */
 vv_status
-vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
+vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o,
+                             const scene_file_defaults *fd) {
     vv_status st;
     char kp[PATH_MAX_LEN];
     const char *mode = NULL;
@@ -608,11 +624,16 @@ vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object
         (st = vv_scene_get_bool(c, e, op, "visible", &o->visible)) != VV_OK ||
         (st = vv_scene_get_vec3(c, e, op, "position", &o->position, NULL)) != VV_OK)
         return st;
-    if (o->mode == VV_MODE_ISO && !has_iso) {
+    /* an object of a file without an appearance of its own takes the
+     * file's defaults, a default isovalue among them */
+    if (json_object_get(e, "transfer_function") || json_object_get(e, "segmentation") ||
+        json_object_get(e, "tf2d") || !o->volume)
+        fd = NULL;
+    if (o->mode == VV_MODE_ISO && !has_iso && !fd) {
         vv_scene_path_key(kp, op, "mode");
         return vv_scene_serr(c, kp, "mode \"iso\" needs an \"isovalue\"");
     }
     if ((st = parse_orientation(c, e, op, o)) != VV_OK || (st = parse_scale(c, e, op, o)) != VV_OK)
         return st;
-    return parse_segmentation(c, e, op, o);
+    return parse_segmentation(c, e, op, o, fd, has_iso);
 }

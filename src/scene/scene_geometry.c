@@ -160,7 +160,7 @@ vv_scene_parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_worl
     if ((st = vv_object_new_geometry(&o, type, name)) != VV_OK)
         return vv_error_prefix(st, "%s: %s", c->path, op);
     if ((st = parse_shape(c, e, op, o)) != VV_OK ||
-        (st = vv_scene_parse_object_fields(c, e, op, o)) != VV_OK ||
+        (st = vv_scene_parse_object_fields(c, e, op, o, NULL)) != VV_OK ||
         (st = vv_scene_parse_effect_flags(c, e, op, o)) != VV_OK) {
         vv_object_free(o);
         return st;
@@ -232,7 +232,7 @@ vv_scene_parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_w
     vv_volume_free(vol);
     if (st != VV_OK)
         return vv_error_prefix(st, "%s: %s", c->path, op);
-    if ((st = vv_scene_parse_object_fields(c, e, op, o)) != VV_OK ||
+    if ((st = vv_scene_parse_object_fields(c, e, op, o, NULL)) != VV_OK ||
         (st = vv_scene_parse_effect_flags(c, e, op, o)) != VV_OK) {
         vv_object_free(o);
         return st;
@@ -304,7 +304,7 @@ vv_scene_parse_grid_object(const sctx *c, json_t *e, const char *op, vv_world *w
     if (f >= 0 && o->grid->fields[f].range[1] > o->grid->fields[f].range[0])
         vv_tf_set_ramp(&o->tf, o->grid->fields[f].range[0], o->grid->fields[f].range[1], 1.0,
                        vv_vec3_make(1, 1, 1), o->tf.opacity_unit_distance);
-    if ((st = vv_scene_parse_object_fields(c, e, op, o)) != VV_OK ||
+    if ((st = vv_scene_parse_object_fields(c, e, op, o, NULL)) != VV_OK ||
         (st = vv_scene_parse_effect_flags(c, e, op, o)) != VV_OK) {
         vv_object_free(o);
         return st;

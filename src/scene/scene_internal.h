@@ -45,8 +45,25 @@ typedef struct sctx {
     vv_filter_cache *fcache;     /* filtered volumes kept between loads; may be NULL */
     /* how unfiltered volume files open (vv_open); NULL: whole, into memory */
     const vv_open_options *open;
-    scene_sources *sources; /* the files opened out of core so far; may be NULL */
+    scene_sources *sources;             /* the files opened out of core so far; may be NULL */
+    const struct scene_overrides *over; /* may be NULL */
 } sctx;
+
+/* What the door (vv_world_open) sets on a scene's World after loading it
+ * (its options: the image size, every volume object's mode), which the
+ * defaults a scene leaves out are made for, as the door makes a file's:
+ * a scene without a view is framed for that size, an object without a
+ * transfer function gets the default of that mode. */
+typedef struct scene_overrides {
+    int width, height; /* 0: the scene's own */
+    int has_mode;
+    vv_render_mode mode;
+} scene_overrides;
+
+/* vv_scene_load_open with the door's overrides @p over (may be NULL). */
+vv_status vv_scene_load_for(vv_world **out, const char *path, const vv_progress *progress,
+                            vv_filter_cache *cache, const vv_open_options *open,
+                            const scene_overrides *over);
 
 /* Frees what @p s holds of the sources (the objects keep theirs). */
 void vv_scene_sources_clear(scene_sources *s);
@@ -165,10 +182,34 @@ vv_status vv_scene_parse_tf(const sctx *c, json_t *tfj, const char *tp, double u
 vv_status vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *full,
                                   vv_object *o);
 
+/* What a volume object read from a file gets when it gives no appearance
+ * of its own (no "transfer_function", "segmentation" or "tf2d"): what the
+ * file opened alone gets (vv_object_default_appearance, for the object's
+ * mode) from the histogram of @p histogram (NULL: the object's volume),
+ * with the opacity unit of level @p shown (NULL: the object's volume). */
+typedef struct scene_file_defaults {
+    const vv_volume *histogram;
+    const vv_volume *shown;
+} scene_file_defaults;
+
 /* Object fields other than the source (file, shape): mode, isovalue,
  * step, shading, visibility, transform, segmentation (TF, 2-D TF,
- * threshold, labels), textures, material and local cut planes. */
-vv_status vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o);
+ * threshold, labels), textures, material and local cut planes. @p fd: the
+ * defaults of an object read from a file (an isovalue among them, so that
+ * mode "iso" needs none), NULL for other objects (a transfer function from
+ * vv_tf_default of their volume; "iso" needs an isovalue). */
+vv_status vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o,
+                                       const scene_file_defaults *fd);
+
+/* The coarsest level of pyramid file @p path (more than one level) as a
+ * whole volume with the pyramid's value range, whose histogram gives the
+ * default transfer function of the file in memory and out of core alike
+ * (docs/scene-format.md, "Default scene"): vv_source_proxy of @p src when
+ * it holds the file out of core, else of the file opened again out of
+ * core, header only, with @p again's options (NULL: the defaults). NULL
+ * when it cannot be read (the error cleared): the level shown gives the
+ * defaults then. The door (vv_world_open) and scene files share it. */
+vv_volume *vv_scene_coarsest_level(const char *path, vv_source *src, const vv_open_options *again);
 
 /* The shading-effect flags every object takes (casts_shadows, ...). */
 vv_status vv_scene_parse_effect_flags(const sctx *c, json_t *e, const char *op, vv_object *o);

@@ -173,6 +173,33 @@ chain_from_json(const json_t *j, vv_filter_chain **out, int *bad_item) {
     return VV_OK;
 }
 
+vv_volume *
+vv_scene_coarsest_level(const char *path, vv_source *src, const vv_open_options *again) {
+    vv_opened od;
+    memset(&od, 0, sizeof od);
+    vv_source *from = src && !vv_source_volume(src) ? src : NULL;
+    if (!from) { /* read whole: its levels opened again, out of core */
+        vv_open_options oo;
+        if (again)
+            oo = *again;
+        else
+            vv_open_options_init(&oo);
+        oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+        oo.levels = 1;
+        oo.load.level = 0;
+        oo.header_only = 1;
+        oo.n_channels = 0;
+        if (vv_open(&od, path, &oo) == VV_OK && od.kind == VV_DATA_VOLUME)
+            from = od.source;
+    }
+    vv_volume *coarse = NULL;
+    if (!from || vv_source_proxy(from, 0, &coarse) != VV_OK)
+        coarse = NULL;
+    vv_opened_clear(&od);
+    vv_error_clear(); /* the level shown's defaults stay */
+    return coarse;
+}
+
 vv_status
 vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     static const char *const own[] = {"file",     "origin", "spacing", "filters",
@@ -237,6 +264,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     vv_source *source = NULL; /* the file out of core (vol its proxy) */
     int source_level = 0;
     int is_label = 0;            /* the file is an OME-Zarr label image */
+    int n_levels = 1;            /* of a pyramid read whole */
     double scale[3] = {1, 1, 1}; /* the volume's voxel over the file's */
     /* "filters": a filter chain applied at load (src/filter), the result cached */
     json_t *fj = json_object_get(e, "filters");
@@ -281,6 +309,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         }
         if (st == VV_OK && (vol = vv_source_volume(od.source))) {
             vv_volume_ref(vol);
+            n_levels = od.info.n_levels;
         } else if (st == VV_OK && (st = vv_source_proxy(od.source, level, &vol)) == VV_OK) {
             const vv_volume *h0 = vv_source_level(od.source, 0);
             source = vv_source_ref(od.source);
@@ -302,6 +331,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         vv_error_clear();
         st = vv_volume_load(&vol, full, &lo);
         is_label = st == VV_OK && li.is_label;
+        n_levels = li.n_levels;
     }
     if (st != VV_OK) {
         vv_filter_chain_free(chain);
@@ -369,7 +399,21 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
     }
     vv_filter_chain_free(chain);
-    st = vv_scene_parse_object_fields(c, e, op, o);
+    /* without an appearance of its own, what the file opened alone shows:
+     * a pyramid read whole takes its coarsest level's histogram (out of
+     * core the proxy is that level), the opacity unit of the level drawn */
+    vv_volume *coarse = NULL;
+    if (n_levels > 1 && !fj && !json_object_get(e, "transfer_function") &&
+        !json_object_get(e, "segmentation") && !json_object_get(e, "tf2d")) {
+        vv_open_options again;
+        vv_open_options_init(&again);
+        again.load.time = time;
+        coarse = vv_scene_coarsest_level(full, NULL, &again);
+    }
+    const scene_file_defaults fd = {coarse,
+                                    o->source ? vv_source_level(o->source, source_level) : NULL};
+    st = vv_scene_parse_object_fields(c, e, op, o, &fd);
+    vv_volume_free(coarse);
     /* an OME-Zarr label image (image-label) without an appearance of its
      * own shows as a label volume (a saved scene always names its
      * transfer_function, so a saved one keeps what it had) */

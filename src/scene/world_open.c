@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "scene/scene_internal.h"
 #include "volvis/io.h"
 #include "volvis/model.h"
 #include "volvis/parallel.h"
@@ -262,36 +263,21 @@ pyramid_appearance(const vv_world_open_options *o, const char *what, vv_source *
     const vv_volume *shown =
         vv_source_volume(src) ? vv_source_volume(src) : vv_source_level(src, level);
     vv_volume *coarse = NULL;
-    vv_opened again;
-    memset(&again, 0, sizeof again);
     if (!o->view.has_tf_range) {
-        vv_source *from = src;
-        if (vv_source_volume(src)) {
-            vv_open_options oo;
+        vv_open_options oo;
+        if (vv_source_volume(src)) /* read whole: opened again for its coarsest level */
             open_options(o, 0, &oo);
-            oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
-            oo.levels = 1;
-            oo.load.level = 0;
-            oo.header_only = 1;
-            from = vv_open(&again, what, &oo) == VV_OK && again.kind == VV_DATA_VOLUME
-                       ? again.source
-                       : NULL;
-        }
-        if (!from || vv_source_proxy(from, 0, &coarse) != VV_OK)
-            coarse = NULL;
-        vv_error_clear(); /* the level shown's defaults stay */
+        coarse = vv_scene_coarsest_level(what, src, vv_source_volume(src) ? &oo : NULL);
     }
-    if (coarse) {
-        const vv_render_mode mode = o->has_mode ? o->view.mode : VV_MODE_COMPOSITE;
-        double iso_lo;
-        vv_tf_default(&obj->tf, coarse, mode, &iso_lo);
-        if (!o->view.has_isovalue)
-            obj->isovalue = obj->threshold = iso_lo;
-    }
-    if (shown)
+    if (coarse) { /* the object's mode is the options' (scene_options) */
+        const double iso = obj->isovalue;
+        vv_object_default_appearance(obj, coarse, shown);
+        if (o->view.has_isovalue)
+            obj->isovalue = obj->threshold = iso;
+    } else if (shown) {
         obj->tf.opacity_unit_distance = vv_tf_default_unit_distance(shown);
+    }
     vv_volume_free(coarse);
-    vv_opened_clear(&again);
 }
 
 /* What the file's metadata says of channel @p c (name, colour, window,
@@ -623,7 +609,10 @@ world_for_scene(const vv_world_open_options *o, const char *what, vv_world **out
     vv_open_options oo;
     const vv_open_options *open = open_options(o, 1, &oo);
     vv_error_clear();
-    vv_status s = vv_scene_load_open(out, what, o->progress, o->filter_cache, open);
+    /* what a scene leaves out is made for the size and mode drawn, as a file's */
+    const scene_overrides over = {o->has_size ? o->view.width : 0, o->has_size ? o->view.height : 0,
+                                  o->has_mode, o->view.mode};
+    vv_status s = vv_scene_load_for(out, what, o->progress, o->filter_cache, open, &over);
     if (s != VV_OK)
         return fail(s, what);
     vv_world *w = *out;

@@ -157,7 +157,8 @@ static const scene_case cases[] = {
     {VOL(", \"filters\": \"--no-such-filter\""), "objects[0].filters: ", 0},
     /* what every object carries */
     {VOL(", \"mode\": \"sum\""), "objects[0].mode: unknown mode \"sum\"", 0},
-    {VOL(", \"mode\": \"iso\""), "objects[0].mode: mode \"iso\" needs an \"isovalue\"", 0},
+    {VOL(", \"mode\": \"iso\", \"transfer_function\": {\"opacity\": []}"),
+     "objects[0].mode: mode \"iso\" needs an \"isovalue\"", 0},
     {VOL(", \"step\": 0"), "objects[0].step: 0 is outside (0, inf)", 0},
     {VOL(", \"shading\": 1"), "objects[0].shading: expected true or false, got a number", 0},
     {VOL(", \"casts_shadows\": \"yes\""), "objects[0].casts_shadows: expected true or false", 0},

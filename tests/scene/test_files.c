@@ -340,7 +340,10 @@ test_errors(void **state) {
     expect_error("bad_mode.json",
                  "{\"objects\": [{\"file\": \"ct_head.nrrd\",\n \"mode\": \"mipp\"}]}", 2, 2,
                  "objects[0].mode: unknown mode \"mipp\"");
-    expect_error("iso.json", "{\"objects\": [{\"file\": \"ct_head.nrrd\",\n  \"mode\": \"iso\"}]}",
+    /* (without a transfer function of its own the file's default isovalue serves) */
+    expect_error("iso.json",
+                 "{\"objects\": [{\"file\": \"ct_head.nrrd\",\n  \"mode\": \"iso\", "
+                 "\"transfer_function\": {\"opacity\": []}}]}",
                  2, 3, "needs an \"isovalue\"");
     expect_error("no_volume.json", "{\"objects\": [{\n  \"file\": \"nothere.nrrd\"}]}", 2, 3,
                  "objects[0].file");

@@ -44,11 +44,13 @@
  * voxels it summarises.
  *
  * Writing is atomic for the store as a whole: everything goes into a
- * temporary folder beside the target ("<path>.tmp-XXXXXX"), synced, then
- * exchanged with an existing store (renameat2 RENAME_EXCHANGE) or renamed
- * into place; the old store is removed after. An existing path that is not
- * a Zarr store (no .zgroup, .zattrs, .zarray or zarr.json) is never
- * replaced. Chunks (shards) are gathered and compressed on every core
+ * temporary folder beside the target ("<path>.tmp-<owner>", named by
+ * vv_tmp_name), synced, then exchanged with an existing store (renameat2
+ * RENAME_EXCHANGE) or renamed into place; the old store is removed after.
+ * The temporary folders of writers of the same path that were killed are
+ * removed first (vv_tmp_sweep), those of writers still running are not.
+ * An existing path that is not a Zarr store (no .zgroup, .zattrs, .zarray
+ * or zarr.json) is never replaced. Chunks (shards) are gathered and compressed on every core
  * (vv_parallel_for).
  *
  * What OME-Zarr cannot hold: a direction matrix (the record's fits).
@@ -1192,17 +1194,25 @@ write_atomic(const vv_volume *v, vv_box_reader read, void *ctx, const char *path
         s = vv_error_set(VV_ERR_IO, "exists and is not a Zarr store (left as it is)");
     char *tmp = NULL;
     if (s == VV_OK) {
-        size_t n = strlen(path) + 16;
+        /* the temporary stores of writers of this path that were killed */
+        (void)vv_tmp_sweep(path);
+        size_t n = strlen(path) + 64;
         tmp = malloc(n);
         if (!tmp)
             s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-        else {
-            snprintf(tmp, n, "%s.tmp-XXXXXX", path);
-            if (!mkdtemp(tmp)) {
-                s = vv_error_set(VV_ERR_IO, "cannot make a folder beside it: %s", strerror(errno));
-                free(tmp);
-                tmp = NULL;
-            }
+        int made = 0, err = EEXIST;
+        for (unsigned attempt = 0; tmp && !made && err == EEXIST && attempt < 100; attempt++) {
+            if (vv_tmp_name(tmp, n, path, (long)getpid(), attempt) != 0)
+                err = ENAMETOOLONG;
+            else if (mkdir(tmp, 0777) == 0)
+                made = 1;
+            else
+                err = errno;
+        }
+        if (tmp && !made) {
+            s = vv_error_set(VV_ERR_IO, "cannot make a folder beside it: %s", strerror(err));
+            free(tmp);
+            tmp = NULL;
         }
     }
     if (s == VV_OK)

@@ -9,12 +9,15 @@
  * before as read back from the file (vv_pyr_reduce: OME-Zarr's levels,
  * voxel for voxel); the header and index last. Memory is bounded by a
  * brick (and a level's 2x2x2 chunks), not the volume. The file is written
- * beside the target and renamed over it.
+ * beside the target (named by vv_tmp_name) and renamed over it; the
+ * temporaries of writers of the same target that were killed are removed
+ * first (vv_tmp_sweep).
  *
  * Thread-safety: one file a call; calls on different files may run at
  * once (a bricked source is read through its own reader, src/io/store/bricked.h).
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -195,13 +198,28 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsign
     const int zstd = (flags & VV_VVB_ZSTD) != 0;
     const int coarse = zstd || (flags & VV_VVB_COARSE);
     const int levels = (flags & VV_VVB_LEVELS) != 0;
-    char *tmp = malloc(strlen(path) + 16);
+    const size_t cap = strlen(path) + 64;
+    char *tmp = malloc(cap);
     if (!tmp)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    sprintf(tmp, "%s.tmp%d", path, (int)getpid());
-    FILE *f = fopen(tmp, "w+b"); /* the levels read the bricks back */
+    /* beside the target, named by this process (vv_tmp_name); the
+     * temporaries of writers of this path that were killed go first */
+    (void)vv_tmp_sweep(path);
+    int fd = -1, err = EEXIST;
+    for (unsigned attempt = 0; fd < 0 && err == EEXIST && attempt < 100; attempt++) {
+        if (vv_tmp_name(tmp, cap, path, (long)getpid(), attempt) != 0)
+            err = ENAMETOOLONG;
+        else if ((fd = open(tmp, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666)) < 0)
+            err = errno;
+    }
+    FILE *f = fd >= 0 ? fdopen(fd, "w+b") : NULL; /* the levels read the bricks back */
     if (!f) {
-        vv_status s = vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+        if (fd >= 0) {
+            err = errno;
+            close(fd);
+            remove(tmp);
+        }
+        vv_status s = vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(err));
         free(tmp);
         return s;
     }
