@@ -871,6 +871,7 @@ typedef struct mr_frame {
         int channel;
     } creader[VV_MAX_CHANNELS];
     int have_cwhole; /* 1: the nodes take cwhole (every node at level 0) */
+    int collect;     /* 1: render_tree only notes the leaves pending (a subtree drawn whole) */
 } mr_frame;
 
 /* Level 0 of one channel by boxes (vv_region_volume of mr_frame.cwhole). */
@@ -1019,6 +1020,8 @@ node_region(const mr_frame *f, int L, const int n0[3], const int n1[3], vv_rende
     return 1;
 }
 
+static void want_levels(mr_frame *f, const mr_node *nd, int pending);
+
 /* The node of level-0 cells n0 .. n1 with the voxels of level L, added to
  * the frame's list unless it is off screen or known to be transparent. */
 static vv_status
@@ -1051,6 +1054,17 @@ plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
         f->nodes = nn;
         f->cap_nodes = cap;
+    }
+    if (f->collect) {
+        /* a leaf of a subtree drawn whole, coarse: pending, its boxes asked */
+        mr_node leaf = {.level = L, .rg = rg};
+        memcpy(leaf.lo, slo, sizeof leaf.lo);
+        memcpy(leaf.hi, shi, sizeof leaf.hi);
+        memcpy(leaf.n0, n0, sizeof leaf.n0);
+        memcpy(leaf.n1, n1, sizeof leaf.n1);
+        f->lod->pending++;
+        want_levels(f, &leaf, 1);
+        return VV_OK;
     }
     mr_node *nd = &f->nodes[f->n_nodes++];
     nd->level = L;
@@ -1417,6 +1431,41 @@ render_tree(mr_frame *f, int depth, const int o[3]) {
                 fits &= (n1[k] - n0[k]) / f->a[want][k] <= f->leaf + 1e-9;
         }
         return plan_node(f, want, n0, n1);
+    }
+    if (f->lod->progressive && f->lod->background && f->lod->load_budget <= 0 && !f->collect &&
+        f->src->version >= 3 && f->src->resident_chunks && f->src->missing_chunks) {
+        /* (a frame that reads nothing itself, the loader reading for it)
+         * nothing of the levels its subtree wants resident: the node whole
+         * at the finest resident level that fits it (one region, not one a
+         * leaf a region of that level: the coarsest is always there); its
+         * leaves pending, their boxes asked as each would ask for them */
+        int none = 1;
+        for (int L = want; L < depth && L < f->n_levels && none; L++) {
+            vv_render_region rg;
+            int lo[3], hi[3];
+            none = !node_region(f, L, n0, n1, &rg, lo, hi) ||
+                   f->src->resident_chunks(f->src->user, L, lo, hi) == 0;
+        }
+        for (int L = depth; none && L < f->n_levels; L++) {
+            int fit = 1;
+            for (int k = 0; k < 3; k++)
+                fit &= (n1[k] - n0[k]) / f->a[L][k] <= f->leaf + 1e-9;
+            vv_render_region rg;
+            int lo[3], hi[3];
+            if (!fit || !node_region(f, L, n0, n1, &rg, lo, hi) ||
+                (L < f->n_levels - 1 && f->src->missing_chunks(f->src->user, L, lo, hi) > 0))
+                continue;
+            vv_status s = plan_node(f, L, n0, n1);
+            f->collect = 1;
+            for (int c = 0; c < 8 && s == VV_OK; c++) {
+                const int half = side / 2;
+                const int co[3] = {o[0] + (c & 1) * half, o[1] + ((c >> 1) & 1) * half,
+                                   o[2] + ((c >> 2) & 1) * half};
+                s = render_tree(f, depth - 1, co);
+            }
+            f->collect = 0;
+            return s;
+        }
     }
     const int half = side / 2;
     int near = 0;

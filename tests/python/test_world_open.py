@@ -261,7 +261,12 @@ def two_channels(tmp_path_factory):
 def test_channels_equal_cli(tmp_path, two_channels):
     w = volvis.World.open(two_channels)
     assert w.opened["n_channels"] == 2
-    assert w._c.objects[0].n_channels == 0  # channel 0 alone, as volvis render FILE
+    assert w._c.objects[0].n_channels == 2  # every channel, as volvis render FILE draws them
+    np.testing.assert_array_equal(
+        opened_render(two_channels, (64, 64))[1],
+        cli_render(tmp_path, two_channels, "--size", "64x64"))
+    w = volvis.World.open(two_channels, channel=1)
+    assert w._c.objects[0].n_channels == 0  # --channel C: that channel alone
     w, img = opened_render(two_channels, (64, 64), channels=[0, 1], blend="maximum")
     assert w._c.objects[0].n_channels == 2
     np.testing.assert_array_equal(img, cli_render(tmp_path, two_channels, "--size", "64x64",

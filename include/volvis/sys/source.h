@@ -181,6 +181,13 @@ typedef struct vv_multires_source {
      *  stays where it is): what a whole-volume sweep reads (shadows). */
     vv_status (*channel_read_box)(void *user, int channel, int level, const int lo[3],
                                   const int hi[3], vv_volume **out);
+    /**
+     * Optional (NULL): how many of the chunks holding voxels lo .. hi of
+     * @p level are in the source's cache (0: nothing of the box is there).
+     * A progressive frame draws a node of which nothing finer is resident
+     * as one region of a coarse level, not as many small ones.
+     */
+    int (*resident_chunks)(void *user, int level, const int lo[3], const int hi[3]);
 } vv_multires_source;
 
 /* ---- chunked stores: a multiresolution format's side of a pyramid ------------------ */

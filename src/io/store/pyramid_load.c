@@ -506,6 +506,24 @@ missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3])
 }
 
 static int
+src_resident(void *user, int level, const int lo[3], const int hi[3]) {
+    vv_pyramid *p = user;
+    const py_level *l = &p->lv[level];
+    int c0[3], c1[3], n = 0;
+    pthread_mutex_lock(p->lock);
+    py_chunk_span(l, lo, hi, c0, c1);
+    for (int z = c0[2]; z <= c1[2]; z++)
+        for (int y = c0[1]; y <= c1[1]; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                const int c[3] = {x, y, z};
+                const py_chunk *e = py_find_chunk(p, level, py_chunk_linear(l, c));
+                n += e && e->state == PY_READY;
+            }
+    pthread_mutex_unlock(p->lock);
+    return n;
+}
+
+static int
 box_range(const vv_pyramid *p, int level, int ch, const int lo[3], const int hi[3], float *vmin,
           float *vmax) {
     const py_level *l = &p->lv[level];
@@ -712,6 +730,7 @@ vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
     out->request = src_request;
     out->stalled = src_stalled;
     out->n_channels = p->n_ch;
+    out->resident_chunks = src_resident;
     if (p->n_ch > 1) {
         out->read_channels = src_read_channels;
         out->channel_range = src_channel_range;
