@@ -36,7 +36,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tests", "io"))
-from http_common import start_nginx, stop_server  # noqa: E402
+from http_common import access_bytes, start_nginx, stop_server  # noqa: E402
 
 NX, NY, NZ, NC = 1024, 1024, 512, 3
 SIZE = "1000x800"
@@ -167,23 +167,6 @@ def render(volvis, store, *args):
 def frame_ms(text):
     """The ms= of each --stats line."""
     return [float(x) for x in re.findall(r"\bms=([0-9.]+)", text)]
-
-
-def access_bytes(log):
-    """(bytes of every response body, bytes of the distinct chunk ranges) of nginx's log."""
-    total, distinct = 0, {}
-    pat = re.compile(r'^(\d+) GET "([^"]*)" "([^"]*)" (\d+)')
-    with open(log) as f:
-        for line in f:
-            m = pat.match(line)
-            if not m:
-                continue
-            status, uri, rng, n = int(m.group(1)), m.group(2), m.group(3), int(m.group(4))
-            total += n
-            if status in (200, 206) and not uri.endswith("zarr.json") and \
-                    not rng.startswith("bytes=-"):
-                distinct[(uri, rng)] = n
-    return total, sum(distinct.values())
 
 
 def main():

@@ -48,7 +48,7 @@ import zarr
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "tests", "io"))
-from http_common import start_nginx, stop_server  # noqa: E402
+from http_common import access_bytes, start_nginx, stop_server  # noqa: E402
 from pairs_common import run_bench, time_it  # noqa: E402
 
 
@@ -110,24 +110,6 @@ def start_proxy(upstream, a):
         p.kill()
         sys.exit("remote_2048: the proxy did not start")
     return p, int(line[1])
-
-
-def access_bytes(log):
-    """(bytes of every response body, bytes of the distinct chunk ranges) in nginx's
-    access log (http_common's "ranges" format)."""
-    total, distinct = 0, {}
-    pat = re.compile(r'^(\d+) GET "([^"]*)" "([^"]*)" (\d+)')
-    with open(log) as f:
-        for line in f:
-            m = pat.match(line)
-            if not m:
-                continue
-            status, uri, rng, n = int(m.group(1)), m.group(2), m.group(3), int(m.group(4))
-            total += n
-            if status in (200, 206) and not uri.endswith("zarr.json") and \
-                    not rng.startswith("bytes=-"):
-                distinct[(uri, rng)] = n
-    return total, sum(distinct.values())
 
 
 def main():

@@ -114,11 +114,10 @@ vv_source_level(const vv_source *s, int level) {
                                                               : NULL;
 }
 
-vv_status
-vv_source_read_box(vv_source *s, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    if (!s || !lo || !hi || !out)
-        return vv_error_set(VV_ERR_INVALID, "source: NULL argument");
-    *out = NULL;
+/* VV_ERR_INVALID unless @p level is one of @p s's and voxels @p lo ..
+ * @p hi (inclusive) lie in it. */
+static vv_status
+check_box(const vv_source *s, int level, const int lo[3], const int hi[3]) {
     const vv_volume *h = vv_source_level(s, level);
     if (!h)
         return vv_error_set(VV_ERR_INVALID, "source: %s: no level %d (it has %d)",
@@ -128,7 +127,16 @@ vv_source_read_box(vv_source *s, int level, const int lo[3], const int hi[3], vv
             return vv_error_set(VV_ERR_INVALID,
                                 "source: %s: box %d..%d outside level %d's %d voxels along axis %d",
                                 vv_path_basename(s->path), lo[k], hi[k], level, h->dims[k], k);
-    return s->ops->read_box(s->user, level, lo, hi, out);
+    return VV_OK;
+}
+
+vv_status
+vv_source_read_box(vv_source *s, int level, const int lo[3], const int hi[3], vv_volume **out) {
+    if (!s || !lo || !hi || !out)
+        return vv_error_set(VV_ERR_INVALID, "source: NULL argument");
+    *out = NULL;
+    const vv_status st = check_box(s, level, lo, hi);
+    return st != VV_OK ? st : s->ops->read_box(s->user, level, lo, hi, out);
 }
 
 /* The channel methods of @p s's table (a version 1 table has none). */
@@ -176,15 +184,8 @@ vv_source_channel_read_box(vv_source *s, int channel, int level, const int lo[3]
     vv_status st = check_channel(s, channel);
     if (st != VV_OK || !has_channels(s))
         return st != VV_OK ? st : vv_source_read_box(s, level, lo, hi, out);
-    const vv_volume *h = vv_source_level(s, level);
-    if (!h)
-        return vv_error_set(VV_ERR_INVALID, "source: %s: no level %d (it has %d)",
-                            vv_path_basename(s->path), level, s->ops->levels(s->user));
-    for (int k = 0; k < 3; k++)
-        if (lo[k] < 0 || hi[k] < lo[k] || hi[k] >= h->dims[k])
-            return vv_error_set(VV_ERR_INVALID,
-                                "source: %s: box %d..%d outside level %d's %d voxels along axis %d",
-                                vv_path_basename(s->path), lo[k], hi[k], level, h->dims[k], k);
+    if ((st = check_box(s, level, lo, hi)) != VV_OK)
+        return st;
     return s->ops->channel_read_box(s->user, channel, level, lo, hi, out);
 }
 

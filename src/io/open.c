@@ -109,19 +109,27 @@ open_pyramid(vv_pyramid **out, const vv_format_record *r, const char *path, int 
     return vv_pyramid_open_store(out, &st, path, cache, info);
 }
 
+/* The format table's row of the multiresolution file @p path into @p r. */
+static vv_status
+store_record(const char *path, const vv_format_record **r) {
+    *r = vv_format_record_of(vv_format_detect_kind(path, VV_DATA_VOLUME, 0));
+    if (!*r || !(*r)->open_store)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: not a multiresolution file (OME-Zarr, BigDataViewer or Imaris "
+                            "HDF5, a .vvb)",
+                            vv_path_basename(path));
+    return VV_OK;
+}
+
 vv_status
 vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time, vv_cache *cache,
                 vv_load_info *info) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "pyramid: NULL argument");
     *out = NULL;
-    const vv_format_record *r = vv_format_record_of(vv_format_detect_kind(path, VV_DATA_VOLUME, 0));
-    if (!r || !r->open_store)
-        return vv_error_set(VV_ERR_FORMAT,
-                            "%s: not a multiresolution file (OME-Zarr, BigDataViewer or Imaris "
-                            "HDF5, a .vvb)",
-                            vv_path_basename(path));
-    return open_pyramid(out, r, path, channel, 0, NULL, time, cache, info);
+    const vv_format_record *r;
+    const vv_status s = store_record(path, &r);
+    return s != VV_OK ? s : open_pyramid(out, r, path, channel, 0, NULL, time, cache, info);
 }
 
 vv_status
@@ -133,13 +141,9 @@ vv_pyramid_open_channels(vv_pyramid **out, const char *path, int n, const int *c
     if (n < 1 || n > VV_STORE_MAX_CHANNELS)
         return vv_error_set(VV_ERR_INVALID, "pyramid: %d channels (1 .. %d)", n,
                             VV_STORE_MAX_CHANNELS);
-    const vv_format_record *r = vv_format_record_of(vv_format_detect_kind(path, VV_DATA_VOLUME, 0));
-    if (!r || !r->open_store)
-        return vv_error_set(VV_ERR_FORMAT,
-                            "%s: not a multiresolution file (OME-Zarr, BigDataViewer or Imaris "
-                            "HDF5, a .vvb)",
-                            vv_path_basename(path));
-    return open_pyramid(out, r, path, channels[0], n, channels, time, cache, info);
+    const vv_format_record *r;
+    const vv_status s = store_record(path, &r);
+    return s != VV_OK ? s : open_pyramid(out, r, path, channels[0], n, channels, time, cache, info);
 }
 
 /* Bytes of a volume of @p h's dims and type. */

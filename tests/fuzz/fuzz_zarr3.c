@@ -37,6 +37,9 @@
  *      bit 3: vv_open whole too
  *   43 the voxels' pattern, 44 the level asked (NGFF; 7 modulo 8: one past
  *      the last)
+ *   45 channels asked out of core at once (modulo 5; 2..4: vv_open's
+ *      n_channels, issue 89), 46 which: two bits each (0..3, past the
+ *      store's channels refused)
  *
  * Then the tweaks, a byte each, taken as the store is written (chunk files
  * in C order of the chunk grid, each shard's inner chunks depth first in
@@ -55,6 +58,9 @@
  * The optional JSON object after a line "--JSON--" is merged into the
  * generated zarr.json of level 0 (a key whose value is null is removed):
  * what the header cannot say (a real store's exact metadata, a wrong key).
+ * A second object after a line "--GROUP--" is merged so into the NGFF
+ * group's "ome" attributes: "omero" channels and their windows (NaN,
+ * inverted, absurd), other multiscales.
  *
  * Each store is read as the library reads one: vv_ome_zarr_read whole,
  * then vv_open out of core (a small box of every level and the proxy) and,
@@ -116,7 +122,7 @@ rd16(reader *r) {
 /* The array the header describes. */
 typedef struct {
     int ndim, dtype, endian, nshard, transpose, order[ZR_MAX_DIM], nb2b, b2b[3], cname, key;
-    int fill_kind, fill_num, dimnames, ngff, whole, seed, ask;
+    int fill_kind, fill_num, dimnames, ngff, whole, seed, ask, n_ch, ch[4];
     int index_start[3], index_crc[3], index_big[3], crc_bad[3], index_noendian[3];
     uint64_t shape[ZR_MAX_DIM], cs[4][ZR_MAX_DIM];
 } spec;
@@ -224,6 +230,9 @@ parse_header(reader *r, spec *s) {
     s->ngff = (h[42] >> 1) % 3;
     s->seed = h[43];
     s->ask = h[44];
+    s->n_ch = h[45] % 5 >= 2 ? h[45] % 5 : 0;
+    for (int k = 0; k < 4; k++)
+        s->ch[k] = (h[46] >> (2 * k)) & 3;
 }
 
 static const char *cnames[] = {"lz4", "zstd", "blosclz", "zlib", "lz4hc"};
@@ -624,6 +633,19 @@ encode_shard(const spec *s, reader *r, int l, const uint64_t *origin, buf *o) {
     return 0;
 }
 
+/* @p merge's keys set into @p j (a null value removes the key). */
+static void
+merge_into(json_t *j, json_t *merge) {
+    const char *k;
+    json_t *v;
+    json_object_foreach(merge, k, v) {
+        if (json_is_null(v))
+            json_object_del(j, k);
+        else
+            json_object_set(j, k, v);
+    }
+}
+
 static void
 mkdirs_write(const char *path, const void *b, size_t n) {
     char p[1024];
@@ -668,16 +690,8 @@ write_array(const spec *s, reader *r, const char *dir, const uint64_t *shape, js
     spec a = *s;
     memcpy(a.shape, shape, sizeof a.shape);
     json_t *j = array_json(&a, shape);
-    if (merge) {
-        const char *k;
-        json_t *v;
-        json_object_foreach(merge, k, v) {
-            if (json_is_null(v))
-                json_object_del(j, k);
-            else
-                json_object_set(j, k, v);
-        }
-    }
+    if (merge)
+        merge_into(j, merge);
     char p[1024];
     snprintf(p, sizeof p, "%s/zarr.json", dir);
     write_json(p, j);
@@ -712,13 +726,18 @@ write_array(const spec *s, reader *r, const char *dir, const uint64_t *shape, js
 }
 
 static void
-open_store(const char *root, vv_open_mode mode, int level, vv_cache *cache) {
+open_store(const char *root, vv_open_mode mode, int level, vv_cache *cache, const spec *s) {
     vv_open_options oo;
     vv_open_options_init(&oo);
     oo.mode = mode;
     oo.load.format = VV_FORMAT_OME_ZARR;
     oo.load.level = level;
     oo.cache = cache;
+    if (s) { /* several channels at once, out of core */
+        oo.n_channels = s->n_ch;
+        for (int k = 0; k < s->n_ch; k++)
+            oo.channels[k] = s->ch[k];
+    }
     vv_opened o;
     memset(&o, 0, sizeof o);
     const vv_status st = vv_open(&o, root, &oo);
@@ -728,7 +747,41 @@ open_store(const char *root, vv_open_mode mode, int level, vv_cache *cache) {
     if (o.kind != VV_DATA_VOLUME || !o.source)
         __builtin_trap(); /* a store holds a volume */
     fuzz_read_source(o.source);
+    const int nc = vv_source_channels(o.source);
+    /* a source has 1 .. VV_MAX_CHANNELS channels */
+    if (s && (nc < 1 || nc > VV_MAX_CHANNELS))
+        __builtin_trap();
+    /* the other channels: a box of the coarsest level, its proxy */
+    for (int c = 1; s && c < nc; c++) {
+        const int l = vv_source_levels(o.source) - 1;
+        const vv_volume *h = vv_source_channel_level(o.source, c, l);
+        if (!h)
+            __builtin_trap(); /* a channel the source counts has its levels */
+        const int lo[3] = {0, 0, 0};
+        const int hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
+        vv_volume *v = NULL;
+        vv_status cst = vv_source_channel_read_box(o.source, c, l, lo, hi, &v);
+        fuzz_check_status(cst);
+        if (cst == VV_OK)
+            fuzz_check_volume(v);
+        v = NULL;
+        cst = vv_source_channel_proxy(o.source, c, l, &v);
+        fuzz_check_status(cst);
+        if (cst == VV_OK)
+            fuzz_check_volume(v);
+    }
     vv_opened_clear(&o);
+}
+
+/* A JSON object of @p n bytes, or NULL (none, not an object). */
+static json_t *
+load_object(const uint8_t *p, size_t n) {
+    json_t *j = n ? json_loadb((const char *)p, n, JSON_DECODE_ANY, NULL) : NULL;
+    if (j && !json_is_object(j)) {
+        json_decref(j);
+        j = NULL;
+    }
+    return j;
 }
 
 int
@@ -742,17 +795,11 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (vv_cache_new(&cache, Z3_BUDGET) != VV_OK)
             __builtin_trap();
     }
-    const uint8_t *desc, *js;
-    size_t ndesc, njs;
+    const uint8_t *desc, *js, *gjs;
+    size_t ndesc, njs, ngjs;
     fuzz_split(data, size, "\n--JSON--\n", &desc, &ndesc, &js, &njs);
-    json_t *merge = NULL;
-    if (njs) {
-        merge = json_loadb((const char *)js, njs, JSON_DECODE_ANY, NULL);
-        if (merge && !json_is_object(merge)) {
-            json_decref(merge);
-            merge = NULL;
-        }
-    }
+    fuzz_split(js, njs, "\n--GROUP--\n", &js, &njs, &gjs, &ngjs);
+    json_t *merge = load_object(js, njs), *gmerge = load_object(gjs, ngjs);
     reader r = {desc, ndesc, 0};
     spec s;
     parse_header(&r, &s);
@@ -768,6 +815,8 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     } else {
         const int levels = s.ngff;
         json_t *g = group_json(&s, levels);
+        if (gmerge)
+            merge_into(json_object_get(json_object_get(g, "attributes"), "ome"), gmerge);
         snprintf(dir, sizeof dir, "%s/zarr.json", root);
         write_json(dir, g);
         json_decref(g);
@@ -782,6 +831,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         }
     }
     json_decref(merge);
+    json_decref(gmerge);
     /* the level asked: one past the last (refused) once in eight */
     const int level = !s.ngff ? 0 : s.ask % 8 == 7 ? s.ngff : s.ask % s.ngff;
     vv_load_options lo;
@@ -796,8 +846,10 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (st == VV_OK)
         fuzz_check_volume(v);
     if (s.whole) /* mostly vv_ome_zarr_read's path again: not every input */
-        open_store(root, VV_OPEN_WHOLE, level, cache);
-    open_store(root, VV_OPEN_OUT_OF_CORE, level, cache);
+        open_store(root, VV_OPEN_WHOLE, level, cache, NULL);
+    open_store(root, VV_OPEN_OUT_OF_CORE, level, cache, NULL);
+    if (s.n_ch)
+        open_store(root, VV_OPEN_OUT_OF_CORE, level, cache, &s);
     fuzz_rm_tree(root);
     return 0;
 }

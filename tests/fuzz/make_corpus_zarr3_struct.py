@@ -357,4 +357,46 @@ for name, merge in HAND.items():
     with open(os.path.join(OUT, f"hand-{name}"), "wb") as f:
         f.write(base + b"\n--JSON--\n" + json.dumps(merge, separators=(",", ":")).encode())
     n += 1
+# hand-made, issue 89: several channels out of core at once (header bytes
+# 45, 46) and hostile "omero" blocks (merged into the group after a line
+# "--GROUP--"), over the zarr-python NGFF seed (two channels, two levels)
+ngff = bytearray(open(os.path.join(OUT, "ref-zarr-python-ngff05"), "rb").read())
+
+
+def chans(which):
+    h = bytearray(ngff)
+    h[45] = len(which)
+    h[46] = sum(c << (2 * k) for k, c in enumerate(which))
+    return bytes(h)
+
+
+def omero(*windows):
+    return {"omero": {"channels": [{"label": f"c{k}", "color": "00FF00", "active": True,
+                                    "window": w} for k, w in enumerate(windows)]}}
+
+
+W = {"min": 0, "max": 255, "start": 10, "end": 200}
+CHANNELS = {
+    "two": (chans([1, 0]), {}, omero(W, W)),
+    "past": (chans([1, 0, 3]), {}, {}),
+    "four-same": (chans([0, 1, 0, 1]), {}, {}),
+    "many": (chans([0, 1]), {"shape": [2, 17, 4, 6, 6]}, {}),
+    "chunks-differ": (chans([0, 1]), {"chunk_grid": {"name": "regular", "configuration": {
+        "chunk_shape": [1, 1, 4, 6, 6]}}}, {}),
+    "window-inverted": (chans([0, 1]), {}, omero({"min": 255, "max": 0, "start": 200, "end": 10},
+                                                 W)),
+    "window-absurd": (chans([0, 1]), {}, omero({"min": -1e308, "max": 1e308, "start": 1e300,
+                                                "end": -1e300}, {"start": "a", "end": [1]})),
+    "window-missing": (chans([1, 0]), {}, omero({}, {"start": 3})),
+    "omero-more": (chans([0, 1]), {}, omero(W, W, W)),
+    "omero-one": (chans([0, 1]), {}, omero(W)),
+    "omero-bad": (chans([0, 1]), {}, {"omero": {"channels": {"a": 1}}}),
+    "inactive": (chans([0, 1]), {}, {"omero": {"channels": [{"active": False, "window": W},
+                                                            {"active": "no"}]}}),
+}
+for name, (head, level0, group) in CHANNELS.items():
+    with open(os.path.join(OUT, f"hand-channels-{name}"), "wb") as f:
+        f.write(head + b"\n--JSON--\n" + json.dumps(level0, separators=(",", ":")).encode() +
+                b"\n--GROUP--\n" + json.dumps(group, separators=(",", ":")).encode())
+    n += 1
 print(f"wrote {n} seeds to {OUT}")

@@ -3,6 +3,7 @@ and of bench/remote_read_pairs.py: a free loopback port, a test CA and server ce
 made with openssl, Debian's nginx serving a folder; the stores the tests serve come from
 cli_common.write_stores."""
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -92,6 +93,25 @@ http {{
     with open(stderr, errors="replace") as f:
         why = " ".join(f.read().split())
     sys.exit(f"{who}: nginx did not start ({why or 'no port accepted within 15 s'})")
+
+
+def access_bytes(log):
+    """(bytes of every response body, bytes of the distinct chunk ranges) in the nginx
+    access LOG of start_nginx (its "ranges" format): zarr.json and shard-index suffix
+    ranges are not chunks."""
+    total, distinct = 0, {}
+    pat = re.compile(r'^(\d+) GET "([^"]*)" "([^"]*)" (\d+)')
+    with open(log) as f:
+        for line in f:
+            m = pat.match(line)
+            if not m:
+                continue
+            status, uri, rng, n = int(m.group(1)), m.group(2), m.group(3), int(m.group(4))
+            total += n
+            if status in (200, 206) and not uri.endswith("zarr.json") and \
+                    not rng.startswith("bytes=-"):
+                distinct[(uri, rng)] = n
+    return total, sum(distinct.values())
 
 
 def stop_server(p):

@@ -11,7 +11,9 @@ camera (newest wins); setting mode, preset and camera from Python
 re-renders; snapshot() is (h, w, 4) uint8 and equals `volvis render` of the
 World saved as a scene, bit for bit; the JPEG of the final frame is within
 JPEG's loss of it; bad traits are refused; the slice views; a .vvb
-pyramid out of core (previews, then the full frame equal to volvis.render).
+pyramid out of core (previews, then the full frame equal to volvis.render);
+a three-channel OME-Zarr store written by zarr-python out of core (one
+object of every channel, each ball in its colour, equal to volvis.render).
 
 Usage: widget_unit.py [BUILD_PYTHON_DIR VOLVIS_CLI OUT_DIR]. Exit 77 when
 anywidget or Pillow is missing (.venv from scripts/install-deps.sh test)."""
@@ -315,6 +317,57 @@ if r.returncode == 0:
           % [h["kind"] for h, _ in cat.of("frame")])
     check(np.array_equal(v.snapshot(), volvis.render(v.world.clone())),
           "out of core: snapshot() equals volvis.render")
+    v.close()
+
+# ---- a store of three channels out of core (issue 89), written by zarr-python 3:
+# one object of every channel, each in its omero colour, equal to volvis.render
+try:
+    import zarr
+except ImportError:
+    zarr = None
+    print("skipped: the three-channel store out of core (zarr-python 3 is not installed)")
+if zarr is not None:
+    store = str(OUT / "three.ome.zarr")
+    g = zarr.open_group(store, mode="w")
+    z, y, x = np.mgrid[0:32, 0:48, 0:96]
+    vox = np.zeros((3, 32, 48, 96), np.uint16)
+    for c in range(3):  # a ball a channel, left to right
+        ball = (z - 16) ** 2 + (y - 24) ** 2 + (x - (16 + 32 * c)) ** 2 < 12 ** 2
+        vox[c][ball] = 3000
+    vox += np.uint16(100)
+    lv, ds = vox, []
+    for k in range(2):
+        a = g.create_array(str(k), shape=lv.shape, dtype=lv.dtype, chunks=(1, 16, 16, 16))
+        a[:] = lv
+        ds.append({"path": str(k), "coordinateTransformations": [
+            {"type": "scale", "scale": [1.0] + [2.0 ** k] * 3}]})
+        lv = lv[:, ::2, ::2, ::2]
+    g.attrs["ome"] = {"version": "0.5", "multiscales": [{"axes": [
+        {"name": "c", "type": "channel"}] + [{"name": n, "type": "space"} for n in "zyx"],
+        "datasets": ds}], "omero": {"channels": [
+            {"label": n, "color": col, "active": True,
+             "window": {"min": 0, "max": 4000, "start": 200, "end": 3000}}
+            for n, col in (("r", "FF0000"), ("g", "00FF00"), ("b", "0000FF"))]}}
+    w3 = volvis.World.open(store, memory="out_of_core", memory_limit="8M")
+    check(w3.opened["out_of_core"] and w3.opened["n_channels"] == 3 and
+          w3.objects[0]._c.n_channels == 3,
+          "a store of three channels out of core opens as one object of them all")
+    v = widgets.View(w3, size=(192, 96))
+    check(v.wait(60), "three channels out of core: the first full frame")
+    snap = v.snapshot()
+    Image.fromarray(snap).save(OUT / "three_channels.png")
+    check(np.array_equal(snap, volvis.render(v.world.clone())),
+          "three channels out of core: snapshot() equals volvis.render")
+    # the default view looks at the front (+x to the left, as an anatomical
+    # front view): the balls red, green, blue from right to left
+    rgb = snap[:, :, :3].astype(float)
+    where = []
+    for c in range(3):
+        own = (rgb[:, :, c] > 40) & (rgb[:, :, c] > 1.5 * np.delete(rgb, c, axis=2).max(axis=2))
+        where.append((int(own.sum()), float(np.nonzero(own)[1].mean()) if own.any() else -1.0))
+    check(all(n > 50 for n, _ in where) and where[0][1] > where[1][1] > where[2][1],
+          "each channel's ball in its own colour, in its place (pixels, mean column: %s)"
+          % [(n, round(x, 1)) for n, x in where])
     v.close()
 
 print("widget_unit: %.1f s, %d failures" % (time.monotonic() - t_start, len(failures)))

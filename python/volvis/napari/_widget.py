@@ -265,16 +265,9 @@ def layer_object(layer, cache=None):
             if cache is not None:
                 cache[key] = one
         pyr = one[1]
-        obj = pyr.object(name=layer.name[:60])
-        lv = pyr.levels[0]
-        sp, org = np.asarray(lv.spacing, dtype=float), np.asarray(lv.origin, dtype=float)
-        factor = scale / sp
-        if not np.allclose(factor, 1.0) or not np.allclose(translate, org):
-            obj.scale = tuple(factor)
-            obj.position = tuple(translate - factor * org)
-        spacing = scale
     elif la is not None:
         pyr = la.pyramid
+    if pyr is not None:  # the layer's placement over level 0's own
         obj = pyr.object(name=layer.name[:60])
         lv = pyr.levels[0]
         sp, org = np.asarray(lv.spacing, dtype=float), np.asarray(lv.origin, dtype=float)

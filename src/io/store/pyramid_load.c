@@ -490,10 +490,12 @@ py_stop_loaders(vv_pyramid *p) {
 
 /* ---- the source interface ----------------------------------------------------- */
 
+/* The chunks of level @p level under voxels @p lo .. @p hi: those not
+ * read yet into @p missing, all of them returned (p->lock held). */
 static int
-missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3]) {
+count_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3], int *missing) {
     const py_level *l = &p->lv[level];
-    int c0[3], c1[3], n = 0;
+    int c0[3], c1[3], n = 0, all = 0;
     py_chunk_span(l, lo, hi, c0, c1);
     for (int z = c0[2]; z <= c1[2]; z++)
         for (int y = c0[1]; y <= c1[1]; y++)
@@ -501,26 +503,27 @@ missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3])
                 const int c[3] = {x, y, z};
                 const py_chunk *e = py_find_chunk(p, level, py_chunk_linear(l, c));
                 n += !e || e->state != PY_READY;
+                all++;
             }
+    *missing = n;
+    return all;
+}
+
+static int
+missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3]) {
+    int n;
+    count_chunks(p, level, lo, hi, &n);
     return n;
 }
 
 static int
 src_resident(void *user, int level, const int lo[3], const int hi[3]) {
     vv_pyramid *p = user;
-    const py_level *l = &p->lv[level];
-    int c0[3], c1[3], n = 0;
+    int missing;
     pthread_mutex_lock(p->lock);
-    py_chunk_span(l, lo, hi, c0, c1);
-    for (int z = c0[2]; z <= c1[2]; z++)
-        for (int y = c0[1]; y <= c1[1]; y++)
-            for (int x = c0[0]; x <= c1[0]; x++) {
-                const int c[3] = {x, y, z};
-                const py_chunk *e = py_find_chunk(p, level, py_chunk_linear(l, c));
-                n += e && e->state == PY_READY;
-            }
+    const int all = count_chunks(p, level, lo, hi, &missing);
     pthread_mutex_unlock(p->lock);
-    return n;
+    return all - missing;
 }
 
 static int

@@ -39,11 +39,12 @@
  * (napari's: the ray caster's parameters, vv_vatten_prepare, and
  * definition, project.c; regions give VV_REGION_ATTENUATED_MAX's maxima
  * and exponent sums) with a 1-D or 2-D transfer function or a threshold,
- * shading, lights and cut planes; regions (the out-of-core drivers); a
- * volume over option device_memory_mb or the device's 3-D image side
- * brick by brick. Refused in one line: several volume objects, more
- * channels, channels by regions or by bricks, solid and image textures and
- * label colours (raycast draws them).
+ * shading, lights and cut planes; regions (the out-of-core drivers; a
+ * region of several channels under the composite rule, the drivers giving
+ * the additive and maximum rules a pass a channel); a volume over option
+ * device_memory_mb or the device's 3-D image side brick by brick. Refused
+ * in one line: several volume objects, more channels, channels by bricks,
+ * solid and image textures and label colours (raycast draws them).
  * Thread-safety: a renderer serves one render at a time (render.h).
  */
 #include <math.h>
