@@ -170,7 +170,7 @@ fixture_free(fixture *f) {
     vv_source_free(f->src);
     for (int c = 0; c < NCH; c++)
         vv_volume_free(f->full[c]);
-    vv_cache_free(f->cache);
+    /* f->cache belongs to testutil (vt_cache), which frees it at exit. */
 }
 
 static int
