@@ -29,7 +29,7 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 venv=0
 wheelvenv=0
 
-pkgs=(build-essential cmake pkg-config libwebsockets-dev libturbojpeg0-dev libteem-dev libnifti2-dev libjansson-dev libblosc-dev libzstd-dev libbz2-dev
+pkgs=(build-essential cmake pkg-config libwebsockets-dev libturbojpeg0-dev libteem-dev libnifti2-dev libjansson-dev libblosc-dev libzstd-dev libbz2-dev liblzma-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
       libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libseccomp-dev libhdf5-dev libopenmpi-dev openmpi-bin

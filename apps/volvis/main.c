@@ -83,7 +83,7 @@ usage(FILE *out) {
                  "the kernel allows (process_vm_readv), else passed in a sealed memfd;\n"
                  "VOLVIS_SANDBOX_PEEK=0 always takes the memfd.\n"
                  "\n"
-                 "An OME-Zarr store may be a URL wherever a file is taken: http://,\n"
+                 "An OME-Zarr or N5 store may be a URL wherever a file is taken: http://,\n"
                  "https:// or s3://BUCKET/KEY (fetched by byte range in this process,\n"
                  "TLS verified). The environment sets the transport: VOLVIS_HTTP_MAX_IN_FLIGHT\n"
                  "(32), VOLVIS_HTTP_RETRIES (3), VOLVIS_HTTP_CONNECT_TIMEOUT (10 s),\n"

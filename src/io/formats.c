@@ -44,6 +44,7 @@
     X(hdf5)                                                                                        \
     X(vvb)                                                                                         \
     X(bdv_xml)                                                                                     \
+    X(n5)                                                                                          \
     X(vtk_grid)                                                                                    \
     X(vtu)                                                                                         \
     X(dx)                                                                                          \

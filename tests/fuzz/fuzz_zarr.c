@@ -24,7 +24,11 @@
  * asked for, whole), then vv_open whole and vv_open out of core (the
  * pyramid of zarr_pyramid.c; the format named, so that a folder that is no
  * store never reaches the DICOM row's GDCM), a small box of every level and the proxy of
- * the coarsest read from what opened; in a cache of the harness's own.
+ * the coarsest read from what opened; in a cache of the harness's own. *
+ * Built with FUZZ_STORE_N5 (fuzz_n5.c includes this file), the same
+ * container is an N5 store (src/io/store/n5.c): attributes.json of a
+ * dataset or of a multiscale group (s0/attributes.json, ...), blocks at
+ * 0/0/0, s0/1/0/2, ...; read by vv_n5_read and opened as the N5 format.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -38,6 +42,16 @@
 #include "fuzz_util.h"
 #include "io/store/zarr.h"
 #include "volvis/volvis.h"
+
+#ifdef FUZZ_STORE_N5
+#define STORE_FORMAT VV_FORMAT_N5
+#define STORE_READ vv_n5_read
+#define STORE_DIR "in.n5"
+#else
+#define STORE_FORMAT VV_FORMAT_OME_ZARR
+#define STORE_READ vv_ome_zarr_read
+#define STORE_DIR "in.zarr"
+#endif
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -158,7 +172,7 @@ open_store(const char *root, vv_open_mode mode, const int ask[3], vv_cache *cach
     oo.mode = mode;
     /* the format named: a folder that is no store is not handed to the
      * DICOM row (GDCM, a third party's, the sandbox's: fuzz_dicom) */
-    oo.load.format = VV_FORMAT_OME_ZARR;
+    oo.load.format = STORE_FORMAT;
     oo.load.level = ask[0];
     oo.load.channel = ask[1];
     oo.load.time = ask[2];
@@ -184,7 +198,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             __builtin_trap();
     }
     char root[512];
-    snprintf(root, sizeof root, "%s/in.zarr", fuzz_dir());
+    snprintf(root, sizeof root, "%s/" STORE_DIR, fuzz_dir());
     fuzz_rm_tree(root); /* whatever a previous input left */
     int ask[3];
     build_store(root, data, size, ask);
@@ -197,7 +211,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     lo.time = ask[2];
     lo.info = &info;
     vv_volume *v = NULL;
-    const vv_status st = vv_ome_zarr_read(&v, root, &lo);
+    const vv_status st = STORE_READ(&v, root, &lo);
     fuzz_check_status(st);
     if (st == VV_OK) {
         if (!memchr(info.channel_name, '\0', sizeof info.channel_name))

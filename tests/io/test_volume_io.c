@@ -68,7 +68,7 @@ test_format_names(void **state) {
     /* the message lists the table's names */
     assert_non_null(
         strstr(vv_error_message(),
-               "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr, hdf5, vvb, bdv, "
+               "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr, hdf5, vvb, bdv, n5, "
                "vtk_grid, vtu, dx, plot3d, netcdf or mesh"));
 }
 
@@ -114,6 +114,7 @@ test_format_table(void **state) {
     assert_non_null(t[VV_FORMAT_OME_ZARR - 1]->open_store);
     assert_non_null(t[VV_FORMAT_HDF5 - 1]->open_store);
     assert_non_null(t[VV_FORMAT_BDV_XML - 1]->open_store);
+    assert_non_null(t[VV_FORMAT_N5 - 1]->open_store);
     assert_non_null(t[VV_FORMAT_VVB - 1]->open_store);
     assert_non_null(t[VV_FORMAT_VVB - 1]->open_bricks);
     assert_non_null(t[VV_FORMAT_NRRD - 1]->raw_layout);
@@ -127,7 +128,7 @@ test_format_table(void **state) {
         {VV_FORMAT_MHD, "mhd"},       {VV_FORMAT_VTK, "vtk"},     {VV_FORMAT_RAW, "raw"},
         {VV_FORMAT_TIFF, "tiff"},     {VV_FORMAT_DICOM, "dicom"}, {VV_FORMAT_VTI, "vti"},
         {VV_FORMAT_OME_ZARR, "zarr"}, {VV_FORMAT_HDF5, "hdf5"},   {VV_FORMAT_VVB, "vvb"},
-        {VV_FORMAT_BDV_XML, "bdv"}};
+        {VV_FORMAT_BDV_XML, "bdv"},   {VV_FORMAT_N5, "n5"}};
     for (size_t i = 0; i < sizeof named / sizeof named[0]; i++)
         assert_string_equal(t[named[i].id - 1]->name, named[i].name);
     /* the third-party parsers are marked for the sandbox */

@@ -13,6 +13,8 @@
 #include "volvis/sys/format.h"
 
 #define ZR_MAX_DIM 5
+/* zr_array.zarr_format of an N5 dataset (n5.c) */
+#define ZR_N5 5
 #define ZR_JSON_MAX (16u << 20)
 #define ZR_CHUNK_MAX ((uint64_t)1 << 30)
 /* The most chunks a whole read looks for (each a file to open). */
@@ -57,7 +59,7 @@ typedef struct zr_array {
     char real[4096];   /* the store's real path: chunks must resolve beneath it ("": unknown) */
     char root[4096];   /* the store's root: every key is relative to it */
     char prefix[1024]; /* the array's key beneath the root ("" the root itself) */
-    int zarr_format;   /* 2 or 3 */
+    int zarr_format;   /* 2 or 3, or ZR_N5 (an N5 dataset: n5.c) */
     /* v3: chunk key encoding "default" (c/0/1/2) or "v2" (0.1.2) */
     int key_default;
     /* v3: sharding levels (0: none); shape[l] the chunk shape at level l
@@ -77,7 +79,12 @@ typedef struct zr_array {
     vv_voxel_type type;
     int swap; /* stored in the other byte order */
     size_t esize;
-    char codec[16]; /* "" raw, zlib, gzip, zstd, blosc */
+    char codec[16]; /* "" raw, zlib, gzip, zstd, blosc; N5 also bzip2, xz */
+    /* N5: the dataset's own resolution and unit (N5 order reversed: the
+     * array's axes), applied when the store is that one dataset */
+    int n5_has_res;
+    double n5_res[ZR_MAX_DIM];
+    char n5_unit[32];
     char sep;
     double fill;
     zr_axis axes[ZR_MAX_DIM];
@@ -286,6 +293,35 @@ vv_status zr3_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], un
 /* The key (relative to the store's root) of the chunk at grid position
  * @p idx of @p a's top chunk grid (a shard's, when sharded). */
 void zr_chunk_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap);
+
+/* N5 (n5.c). The root @p attrs (its attributes.json, a json_t *) of an
+ * N5 store read as OME metadata: a dataset (dimensions, dataType): *za
+ * NULL, a plain array; a multiscale group (datasets s0 .. sN, their
+ * downsamplingFactors or the group's scales; resolution or
+ * pixelResolution; axes and units; or the multiscales of a COSEM
+ * group): *za a new OME-NGFF multiscales object (a json_t *) in the
+ * array's axis order (N5's reversed). Errors name attributes.json. */
+vv_status zr_n5_root(const zr_array *a, void *attrs, void **za);
+/* N5: the dataset metadata @p j (its attributes.json) into @p a: the
+ * axes reversed (N5 lists the fastest first), blockSize as chunks,
+ * dataType, compression (raw, gzip, bzip2, xz, zstd, blosc). */
+vv_status zr_n5_parse_array(zr_array *a, void *j);
+/* N5: the block @p src (@p m bytes: its big-endian header, mode default or
+ * varlength, then the compressed voxels) decoded into exactly @p n bytes at
+ * @p out, the array's whole chunk in the array's axis order; a block
+ * smaller than the chunk (at the array's end) placed at its start, the rest
+ * zero. @p what names the block in errors. Reentrant. */
+vv_status zr_n5_decode(const zr_array *a, const unsigned char *src, size_t m, unsigned char *out,
+                       size_t n, const char *what);
+/* N5: the key of the block at grid position @p idx (the array's axes):
+ * its indices in N5 order, "/" between. */
+void zr_n5_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap);
+/* N5: 1 when @p dir holds an attributes.json of an N5 dataset, multiscale
+ * group or container (the format row's looks_like). */
+int vv_n5_looks_like(const vv_format_probe *p, int deep);
+/* N5: vv_ome_zarr_read's contract for an N5 dataset or multiscale group
+ * (errors prefixed "n5: NAME"). */
+vv_status vv_n5_read(vv_volume **out, const char *path, const vv_load_options *opt);
 
 /* Frees @p a's shard index cache (zarr3.c). */
 void zr3_cache_free(zr_array *a);

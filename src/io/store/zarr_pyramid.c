@@ -188,6 +188,8 @@ zp_store_open(vv_store *st, const char *path, int channel, int n, const int *cha
     if (!probe)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     vv_status s = vv_zr_parse_store(path, 0, probe, channel, NULL, &n_levels);
+    if (s == VV_OK && probe->zarr_format == ZR_N5)
+        st->name = "n5";
     vv_zr_array_release(probe);
     free(probe);
     if (s != VV_OK)

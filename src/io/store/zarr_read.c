@@ -207,7 +207,10 @@ prefetch_levels(const zr_array *a, json_t *dsl, int count) {
         const char *p = json_string_value(json_object_get(json_array_get(dsl, (size_t)i), "path"));
         for (int f = 0; p && f < per; f++) {
             char *k = keys + (size_t)n * 1100;
-            snprintf(k, 1100, "%s/%s", p, f ? ".zarray" : "zarr.json");
+            snprintf(k, 1100, "%s/%s", p,
+                     a->zarr_format == ZR_N5 ? "attributes.json"
+                     : f                     ? ".zarray"
+                                             : "zarr.json");
             if (memo_get(a, k, NULL, NULL, NULL))
                 continue; /* fetched lately */
             g[n++] = (bs_get){.key = k, .off = 0, .len = ZR_ALL, .max = ZR_JSON_MAX};
@@ -334,6 +337,15 @@ static vv_status
 parse_zarray(zr_array *a) {
     vv_status s;
     char key[1100];
+    if (a->zarr_format == ZR_N5) { /* an N5 level or dataset: n5.c */
+        array_key(a, "attributes.json", key, sizeof key);
+        json_t *j = load_json(a, key, "attributes.json", 0, &s);
+        if (!j)
+            return s;
+        s = zr_n5_parse_array(a, j);
+        json_decref(j);
+        return s;
+    }
     array_key(a, "zarr.json", key, sizeof key);
     json_t *j = load_json(a, key, "zarr.json", 1, &s);
     if (s != VV_OK)
@@ -483,7 +495,9 @@ apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *md,
 
 /* The store's OME metadata into *za (a new reference; NULL: a plain
  * array): the root's zarr.json (Zarr v3: a group's attributes.ome, or an
- * array) or else its .zattrs; *md names the file. */
+ * array) or else its .zattrs, or else an N5 store's attributes.json (a
+ * dataset, or a multiscale group as the multiscales it amounts to); *md
+ * names the file. */
 static vv_status
 root_metadata(const zr_array *a, json_t **za, const char **md) {
     vv_status s;
@@ -494,6 +508,17 @@ root_metadata(const zr_array *a, json_t **za, const char **md) {
         return s;
     if (!z3) {
         *za = load_json(a, ".zattrs", ".zattrs", 1, &s);
+        if (s != VV_OK || *za)
+            return s;
+        /* N5: a dataset, or a multiscale group read as OME-NGFF (n5.c) */
+        json_t *n5 = load_json(a, "attributes.json", "attributes.json", 1, &s);
+        if (s != VV_OK || !n5)
+            return s;
+        *md = "attributes.json";
+        void *ms = NULL;
+        s = zr_n5_root(a, n5, &ms);
+        *za = ms;
+        json_decref(n5);
         return s;
     }
     *md = "zarr.json";
@@ -628,7 +653,8 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
     const char *md = ".zattrs";
     if ((s = root_metadata(a, &za, &md)) != VV_OK)
         return s;
-    a->zarr_format = strcmp(md, "zarr.json") ? 2 : 3; /* the levels' format */
+    /* the levels' format */
+    a->zarr_format = !strcmp(md, "zarr.json") ? 3 : !strcmp(md, "attributes.json") ? ZR_N5 : 2;
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     if (za && !json_object_get(za, "multiscales") &&
         (s = zr_refuse_group(root, za, md)) != VV_OK) { /* a v2 plate, well, labels group */
@@ -698,7 +724,7 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
     }
     /* Zarr v3 dimension_names name the axes when the OME metadata does not
      * (each one x, y, z, c or t) */
-    int dimnames = a->zarr_format == 3 && !axes;
+    int dimnames = (a->zarr_format == 3 || a->zarr_format == ZR_N5) && !axes;
     for (int i = 0; dimnames && i < a->ndim; i++)
         dimnames = axis_kind(a->axes[i].name, NULL) >= 0;
     /* the axes: from the metadata, else (no OME axes) the last three are z,
@@ -745,6 +771,13 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
             s = apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim,
                                  a->scale, a->trans, md, "multiscales");
     }
+    /* an N5 dataset opened alone: its own resolution and unit */
+    for (int i = 0; s == VV_OK && !ds0 && a->zarr_format == ZR_N5 && a->n5_has_res && i < a->ndim;
+         i++)
+        if (a->axes[i].kind == 0) {
+            a->scale[i] = a->n5_res[i];
+            snprintf(a->axes[i].unit, sizeof a->axes[i].unit, "%s", a->n5_unit);
+        }
     /* omero: the channel's label and colour (RRGGBB) */
     json_t *chs = za ? json_object_get(json_object_get(za, "omero"), "channels") : NULL;
     json_t *ch = json_array_get(chs, (size_t)(channel < 0 ? 0 : channel));
@@ -775,6 +808,10 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
 
 void
 zr_chunk_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap) {
+    if (a->zarr_format == ZR_N5) {
+        zr_n5_key(a, idx, key, cap);
+        return;
+    }
     int len = snprintf(key, cap, "%s%s", a->prefix, a->prefix[0] ? "/" : "");
     const int c = a->zarr_format == 3 && a->key_default;
     if (c && len < (int)cap)
@@ -859,6 +896,8 @@ vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
 vv_status
 vv_zr_decode_unit(const zr_array *a, const unsigned char *src, size_t m, unsigned char *out,
                   size_t n, const char *what) {
+    if (a->zarr_format == ZR_N5)
+        return zr_n5_decode(a, src, m, out, n, what);
     if (a->zarr_format != 3)
         return decode_v2(a, src, m, out, n, what);
     const zr_chain *c = &a->chain[a->nshard];
@@ -875,6 +914,8 @@ vv_zr_decode_unit(const zr_array *a, const unsigned char *src, size_t m, unsigne
 
 uint64_t
 vv_zr_read_held(const zr_array *a, size_t n) {
+    if (a->zarr_format == ZR_N5)
+        return n; /* a block cut at the array's end, decoded before it is placed */
     if (a->zarr_format != 3)
         return 0; /* the v2 reader's count as it was: the decoded chunk */
     const zr_chain *c = &a->chain[a->nshard];
@@ -1253,6 +1294,17 @@ vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) 
     vv_status s = read_store(out, path, opt);
     if (s != VV_OK)
         return vv_error_prefix(s, "zarr: %s", bs_name(path));
+    return VV_OK;
+}
+
+vv_status
+vv_n5_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+    if (!out || !path || !opt)
+        return vv_error_set(VV_ERR_INVALID, "n5: NULL argument");
+    *out = NULL;
+    vv_status s = read_store(out, path, opt);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "n5: %s", bs_name(path));
     return VV_OK;
 }
 

@@ -1,0 +1,320 @@
+#!/usr/bin/env python3
+"""N5 datasets and multiscale groups written by tensorstore, read by VolVis (issue 91).
+
+  n5_read_cli.py VOLVIS OUTDIR
+
+Run with the .venv of scripts/install-deps.sh test (vv_pypi_test): tensorstore's n5
+driver writes, VolVis reads; numpy is the judge.
+
+- one dataset per compression (raw, gzip, gzip with useZlib, bzip2, xz, blosc, zstd),
+  blocks that do not divide the dimensions (the blocks at the end cut to the array, as
+  N5 stores them), and one per data type (uint8 .. uint64, int8 .. int64, float32,
+  float64): `volvis convert DATASET OUT.nrrd` voxel for voxel (N5 lists x first);
+- a 4-D dataset (x, y, z, c, its axes named): two channels, channel 1 read alike;
+- a real CT (../shared/data/volumes/ct_head.nrrd, int16, 0.96 x 0.96 x 1.5 mm) as an
+  n5-viewer multiscale group s0 .. s2 (2x2x2 and 4x4x4 means; the group's scales,
+  resolution, units and axes; each level's downsamplingFactors): `volvis info` names
+  N5, three levels and the spacing; --level 1 is s1 voxel for voxel with twice the
+  spacing and the centre shift of a 2x2x2 mean; the same group described by
+  pixelResolution and downsamplingFactors alone, and by a COSEM multiscales block,
+  opens alike; rendered out of core (--memory-limit 8M) as in memory (>= 50 dB);
+- served by nginx on loopback: the dataset and the group by URL equal to the local
+  files (convert voxel for voxel, the out-of-core render pixel for pixel);
+- hostile datasets and groups (a block shorter than its header, object mode, a block
+  of other dimensions, a block larger than blockSize, a block that does not decode,
+  absurd or missing sizes, unknown compression and data type, a group whose scales
+  name a level it lacks): one line naming the store, a non-zero exit, no output.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+try:
+    import numpy as np
+    import tensorstore as ts
+    from PIL import Image
+except ImportError as e:  # pragma: no cover
+    print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
+    sys.exit(77)
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_common import Checks, read_nrrd, run  # noqa: E402
+from http_common import nginx_path, start_nginx, stop_server  # noqa: E402
+
+VOLVIS, OUT = sys.argv[1], sys.argv[2]
+shutil.rmtree(OUT, ignore_errors=True)
+os.makedirs(OUT)
+check = Checks()
+SIZE = ["--size", "200x160"]
+CT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "shared", "data",
+                  "volumes", "ct_head.nrrd")
+
+
+def volvis(*args):
+    return run(VOLVIS, *args)
+
+
+def n5_write(path, arr, block, comp=None, axes=None, extra=None):
+    """ARR (N5 order: x first) written by tensorstore as an N5 dataset at PATH."""
+    meta = {"dimensions": list(arr.shape), "blockSize": list(block),
+            "dataType": str(arr.dtype), "compression": comp or {"type": "gzip"}}
+    t = ts.open({"driver": "n5", "kvstore": {"driver": "file", "path": path},
+                 "metadata": meta, "create": True, "delete_existing": True}).result()
+    t.write(arr).result()
+    if axes or extra:  # attributes beside tensorstore's, as n5-viewer and Neuroglancer add
+        f = os.path.join(path, "attributes.json")
+        with open(f) as fh:
+            at = json.load(fh)
+        if axes:
+            at["axes"] = axes
+        at.update(extra or {})
+        with open(f, "w") as fh:
+            json.dump(at, fh)
+    return path
+
+
+def read_back(store, *args):
+    out = os.path.join(OUT, "back.nrrd")
+    if os.path.exists(out):
+        os.remove(out)
+    p = volvis("convert", store, out, "--quiet", *args)
+    if p.returncode != 0:
+        check(False, f"convert {os.path.basename(store)} {' '.join(args)}: {p.stderr.strip()}")
+        return None, None, None
+    return read_nrrd(out)
+
+
+def same(got, want):
+    """GOT (z, y, x, as read back) equal to WANT (N5 order: x, y, z)."""
+    if got is None:
+        return False
+    w = want.transpose(2, 1, 0)
+    if got.shape != w.shape:
+        return False
+    return bool(np.array_equal(got.astype(np.float64), w.astype(np.float64)))
+
+
+def image(path):
+    return np.asarray(Image.open(path).convert("RGB"), dtype=np.float64)
+
+
+def psnr(a, b):
+    m = ((image(a) - image(b)) ** 2).mean()
+    return 99.0 if m == 0 else 10 * np.log10(255.0 ** 2 / m)
+
+
+def render(name, store, *args):
+    out = os.path.join(OUT, name + ".png")
+    p = volvis("render", store, "-o", out, *SIZE, *args)
+    ok = p.returncode == 0 and os.path.exists(out)
+    if not ok:
+        check(False, f"render {name}: exit {p.returncode}: {p.stderr.strip()}")
+    return out if ok else None
+
+
+rng = np.random.default_rng(91)
+
+# ---- every compression, blocks cut at the end ------------------------------------------------
+X, Y, Z = 37, 29, 23
+u16 = rng.integers(0, 60000, (X, Y, Z)).astype(np.uint16)
+comps = {"raw": {"type": "raw"}, "gzip": {"type": "gzip"},
+         "zlib": {"type": "gzip", "useZlib": True},
+         "bzip2": {"type": "bzip2", "blockSize": 9}, "xz": {"type": "xz", "preset": 6},
+         "blosc": {"type": "blosc", "cname": "lz4", "clevel": 5, "shuffle": 1},
+         "zstd": {"type": "zstd", "level": 3}}
+for name, comp in comps.items():
+    ds = n5_write(os.path.join(OUT, f"c_{name}.n5"), u16, (16, 8, 10), comp)
+    got, _, _ = read_back(ds)
+    check(same(got, u16), f"{name}: read voxel for voxel ({X} x {Y} x {Z}, blocks 16 x 8 x 10)")
+
+# ---- every data type --------------------------------------------------------------------------
+for dt in ("uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64", "int64",
+           "uint64"):
+    d = np.dtype(dt)
+    if d.kind == "f":
+        a = rng.normal(0, 1000, (X, Y, Z)).astype(d)
+    else:
+        info = np.iinfo(d)
+        lo, hi = max(info.min, -(2 ** 40)), min(info.max, 2 ** 40)  # exact as doubles
+        a = rng.integers(lo, hi, (X, Y, Z), dtype=d)
+    ds = n5_write(os.path.join(OUT, f"t_{dt}.n5"), a, (20, 16, 12))
+    got, _, _ = read_back(ds)
+    check(same(got, a), f"{dt}: read voxel for voxel")
+
+# ---- a 4-D dataset: x, y, z, c -----------------------------------------------------------------
+a4 = rng.integers(0, 255, (X, Y, Z, 2)).astype(np.uint8)
+d4 = n5_write(os.path.join(OUT, "xyzc.n5"), a4, (16, 16, 16, 1), axes=["x", "y", "z", "c"])
+p = volvis("info", d4)
+check(p.returncode == 0 and "channels:     2" in p.stdout.replace("channels:", "channels:"),
+      f"xyzc: info names 2 channels: {p.stdout.strip()[:200]} {p.stderr.strip()}")
+got, _, _ = read_back(d4, "--channel", "1")
+check(same(got, a4[..., 1]), "xyzc: channel 1 read voxel for voxel")
+
+
+# ---- a real CT as a multiscale group -----------------------------------------------------------
+def mean2(a):
+    """2x2x2 means (float, then rounded as n5-spark and BigDataViewer do) of A (x, y, z)."""
+    s = [n - n % 2 for n in a.shape]
+    b = a[:s[0], :s[1], :s[2]].astype(np.float64)
+    b = b.reshape(s[0] // 2, 2, s[1] // 2, 2, s[2] // 2, 2).mean(axis=(1, 3, 5))
+    return np.round(b).astype(a.dtype)
+
+
+ct, _, _ = read_nrrd(CT)  # z, y, x
+ct = np.ascontiguousarray(ct.transpose(2, 1, 0))  # N5 order: x, y, z
+levels = [ct, mean2(ct), mean2(mean2(ct))]
+with open(CT, "rb") as f:  # its spacing: a "spacings" field (read_nrrd reads directions)
+    head = f.read(4096).partition(b"\n\n")[0].decode(errors="replace")
+RES = [round(float(v), 6) for ln in head.splitlines() if ln.startswith("spacings:")
+       for v in ln.split(":", 1)[1].split()]
+assert len(RES) == 3 and RES[2] == 1.5, RES
+
+
+def ct_group(name, group_attrs, level_attrs):
+    g = os.path.join(OUT, name)
+    shutil.rmtree(g, ignore_errors=True)
+    for i, lv in enumerate(levels):
+        n5_write(os.path.join(g, f"s{i}"), lv, (64, 64, 32), extra=level_attrs(i))
+    with open(os.path.join(g, "attributes.json"), "w") as f:
+        json.dump(group_attrs, f)
+    return g
+
+
+g1 = ct_group("ct_viewer.n5",
+              {"n5": "4.0.0", "scales": [[1, 1, 1], [2, 2, 2], [4, 4, 4]], "resolution": RES,
+               "units": ["mm", "mm", "mm"], "axes": ["x", "y", "z"]},
+              lambda i: {"downsamplingFactors": [2 ** i] * 3})
+g2 = ct_group("ct_pixelres.n5",
+              {"n5": "4.0.0", "pixelResolution": {"dimensions": RES, "unit": "mm"}},
+              lambda i: {"downsamplingFactors": [2 ** i] * 3})
+cosem = {"multiscales": [{"name": "ct", "datasets": [
+    {"path": f"s{i}", "transform": {"axes": ["z", "y", "x"], "units": ["mm"] * 3,
+                                    "scale": [RES[2] * 2 ** i, RES[1] * 2 ** i, RES[0] * 2 ** i],
+                                    "translate": [(2 ** i - 1) / 2 * RES[2],
+                                                  (2 ** i - 1) / 2 * RES[1],
+                                                  (2 ** i - 1) / 2 * RES[0]]}}
+    for i in range(3)]}]}
+g3 = ct_group("ct_cosem.n5", cosem, lambda i: {})
+
+p = volvis("info", g1)
+txt = p.stdout
+check(p.returncode == 0 and "format:       n5" in txt and "256 x 256 x 108" in txt,
+      f"info: N5, 256 x 256 x 108: {txt[:300]} {p.stderr.strip()}")
+check("3" in "".join(ln for ln in txt.splitlines() if "level" in ln.lower()),
+      f"info: 3 levels: {[ln for ln in txt.splitlines() if 'level' in ln.lower()]}")
+want_sp = [RES[0] * 2, RES[1] * 2, RES[2] * 2]
+want_or = [RES[0] / 2, RES[1] / 2, RES[2] / 2]  # the centre of a 2x2x2 mean
+for g in (g1, g2, g3):
+    got, sp, org = read_back(g, "--level", "1")
+    n = os.path.basename(g)
+    check(same(got, levels[1]), f"{n}: --level 1 is s1 voxel for voxel")
+    check(sp is not None and np.allclose(sp, want_sp, rtol=1e-4),
+          f"{n}: level 1's spacing {sp}, want {want_sp}")
+    check(org is not None and np.allclose(org, want_or, rtol=1e-4, atol=1e-6),
+          f"{n}: level 1's origin {org}, want {want_or}")
+    got, sp, _ = read_back(g)
+    check(same(got, levels[0]) and sp is not None and np.allclose(sp, RES, rtol=1e-4),
+          f"{n}: level 0 voxel for voxel, spacing {sp} (want {RES})")
+
+mem = render("ct_mem", g1, "--level", "0", "--set", "refinement=off", "--tf", "100:1500")
+orig = render("ct_nrrd", CT, "--set", "refinement=off", "--tf", "100:1500")
+if mem and orig:
+    d = psnr(mem, orig)
+    check(d >= 60, f"ct: the N5 group's level 0 draws as the NRRD it came from ({d:.1f} dB; "
+          f"its orientation and spacing)")
+ooc = render("ct_ooc", g1, "--level", "0", "--memory-limit", "8M", "--tf", "100:1500")
+if mem and ooc:
+    d = psnr(mem, ooc)
+    check(d >= 50, f"ct: out of core (--memory-limit 8M) {d:.1f} dB from in memory (>= 50)")
+
+# ---- by URL: nginx on loopback -------------------------------------------------------------------
+if nginx_path():
+    nginx, port, _ = start_nginx(OUT, OUT, "n5_read_cli")
+    try:
+        url = f"http://127.0.0.1:{port}"
+        got, _, _ = read_back(f"{url}/c_gzip.n5")
+        check(same(got, u16), "by URL: a gzip dataset voxel for voxel")
+        got, sp, _ = read_back(f"{url}/ct_viewer.n5", "--level", "1")
+        check(same(got, levels[1]) and sp is not None and np.allclose(sp, want_sp, rtol=1e-4),
+              "by URL: the CT group's level 1 voxel for voxel, its spacing")
+        rem = render("ct_url_ooc", f"{url}/ct_viewer.n5", "--level", "0", "--memory-limit", "8M",
+                     "--tf", "100:1500")
+        if rem and ooc:
+            d = psnr(rem, ooc)
+            check(d >= 99, f"by URL: the out-of-core render equals the local one ({d:.1f} dB)")
+    finally:
+        stop_server(nginx)
+else:
+    check(False, "nginx is missing (apt-get install nginx-light): the URL checks cannot run")
+
+
+# ---- hostile stores --------------------------------------------------------------------------------
+def hostile(name, make, want):
+    """A copy of the gzip dataset spoilt by MAKE(path): convert fails with one line naming
+    the store (and WANT), a non-zero exit, no output."""
+    d = os.path.join(OUT, f"bad_{name}.n5")
+    shutil.rmtree(d, ignore_errors=True)
+    shutil.copytree(os.path.join(OUT, "c_gzip.n5"), d)
+    make(d)
+    out = os.path.join(OUT, f"bad_{name}.nrrd")
+    p = volvis("convert", d, out, "--quiet")
+    lines = p.stderr.strip().splitlines()
+    check(p.returncode != 0 and len(lines) == 1 and f"bad_{name}.n5" in p.stderr and
+          want in p.stderr and not os.path.exists(out),
+          f"hostile {name}: exit {p.returncode}, {p.stderr.strip()!r} (wants {want!r})")
+
+
+def block(d):
+    return os.path.join(d, "0", "0", "0")
+
+
+def rewrite_block(d, fn):
+    with open(block(d), "rb") as f:
+        b = bytearray(f.read())
+    with open(block(d), "wb") as f:
+        f.write(fn(b))
+
+
+def attrs(d, **kw):
+    f = os.path.join(d, "attributes.json")
+    with open(f) as fh:
+        at = json.load(fh)
+    for k, v in kw.items():
+        if v is None:
+            at.pop(k, None)
+        else:
+            at[k] = v
+    with open(f, "w") as fh:
+        json.dump(at, fh)
+
+
+hostile("short", lambda d: rewrite_block(d, lambda b: b[:10]), "header")
+hostile("mode", lambda d: rewrite_block(d, lambda b: b"\x00\x02" + b[2:]), "mode 2")
+hostile("ndim", lambda d: rewrite_block(d, lambda b: b[:2] + b"\x00\x02" + b[4:]),
+        "2 dimensions")
+hostile("bigblock", lambda d: rewrite_block(d, lambda b: b[:4] + b"\x00\x01\x00\x00" + b[8:]),
+        "blockSize")
+hostile("garbage", lambda d: rewrite_block(d, lambda b: b[:16] + bytes(len(b) - 16)),
+        "does not decode")
+hostile("dims", lambda d: attrs(d, dimensions=[-5, 29, 23]), "dimensions")
+hostile("huge", lambda d: attrs(d, dimensions=[2 ** 50, 29, 23]), "dimensions")
+hostile("zeroblock", lambda d: attrs(d, blockSize=[0, 8, 10]), "blockSize")
+hostile("nodims", lambda d: attrs(d, dimensions=None), "attributes.json")
+hostile("lz4", lambda d: attrs(d, compression={"type": "lz4"}), "lz4")
+hostile("object", lambda d: attrs(d, dataType="object"), "object")
+
+
+def missing_level(d):
+    os.makedirs(os.path.join(d, "s0"))
+    for e in os.listdir(d):
+        if e != "s0":
+            shutil.move(os.path.join(d, e), os.path.join(d, "s0", e))
+    with open(os.path.join(d, "attributes.json"), "w") as f:
+        json.dump({"n5": "4.0.0", "scales": [[1, 1, 1], [2, 2, 2]]}, f)
+
+
+hostile("nolevel", missing_level, "no dataset s1")
+
+check.finish("n5_read_cli")
