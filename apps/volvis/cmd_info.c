@@ -687,8 +687,9 @@ cli_info_main(int argc, char **argv) {
     }
     printf("voxel type:   %s (%zu byte%s)\n", vv_voxel_type_name(v->type),
            vv_voxel_type_size(v->type), vv_voxel_type_size(v->type) == 1 ? "" : "s");
-    if (zc.is_label)
-        printf("labels:       a label image (OME-Zarr image-label): rendered as a label volume\n");
+    if (zc.is_label || axes.is_label)
+        printf("labels:       a label image (OME-Zarr image-label, a precomputed segmentation): "
+               "rendered as a label volume\n");
     print_ome_zarr_labels(path, &zc);
     vv_ome_zarr_contents_clear(&zc);
     printf("spacing:      %g x %g x %g%s%s\n", hd->spacing[0], hd->spacing[1], hd->spacing[2],

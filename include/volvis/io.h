@@ -52,12 +52,13 @@ typedef enum vv_format {
     VV_FORMAT_RAW,
     VV_FORMAT_TIFF,
     VV_FORMAT_DICOM,
-    VV_FORMAT_VTI,      /**< VTK XML image data (ParaView's .vti), read and written */
-    VV_FORMAT_OME_ZARR, /**< OME-Zarr 0.4 (Zarr v2 folder), every multiscales level */
-    VV_FORMAT_HDF5,     /**< BigDataViewer / Imaris HDF5 pyramids */
-    VV_FORMAT_VVB,      /**< VolVis's bricked volumes, with pyramid levels or without */
-    VV_FORMAT_BDV_XML,  /**< BigDataViewer's dataset XML (its HDF5 file beside it) */
-    VV_FORMAT_N5        /**< N5 datasets and multiscale groups (Janelia, BigDataViewer, COSEM) */
+    VV_FORMAT_VTI,        /**< VTK XML image data (ParaView's .vti), read and written */
+    VV_FORMAT_OME_ZARR,   /**< OME-Zarr 0.4 (Zarr v2 folder), every multiscales level */
+    VV_FORMAT_HDF5,       /**< BigDataViewer / Imaris HDF5 pyramids */
+    VV_FORMAT_VVB,        /**< VolVis's bricked volumes, with pyramid levels or without */
+    VV_FORMAT_BDV_XML,    /**< BigDataViewer's dataset XML (its HDF5 file beside it) */
+    VV_FORMAT_N5,         /**< N5 datasets and multiscale groups (Janelia, BigDataViewer, COSEM) */
+    VV_FORMAT_PRECOMPUTED /**< Neuroglancer precomputed volumes (an info and its scales) */
     /* then the grid and mesh formats, by name (vv_format_parse) */
 } vv_format;
 

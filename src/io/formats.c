@@ -45,6 +45,7 @@
     X(vvb)                                                                                         \
     X(bdv_xml)                                                                                     \
     X(n5)                                                                                          \
+    X(precomputed)                                                                                 \
     X(vtk_grid)                                                                                    \
     X(vtu)                                                                                         \
     X(dx)                                                                                          \

@@ -7,7 +7,7 @@
  * sizes, element counts; the compressed voxels). The input is fuzz_zarr.c's
  * container of files, and the reads are its: the store read whole, then
  * opened whole and out of core, a box of every level read. The one harness
- * source, built twice (corpus: tests/fuzz/corpus/n5, seeded by
+ * source, built three times (corpus: tests/fuzz/corpus/n5, seeded by
  * tests/fuzz/make_corpus_n5.py from stores tensorstore writes).
  */
 #define FUZZ_STORE_N5 1

@@ -29,6 +29,9 @@
  * container is an N5 store (src/io/store/n5.c): attributes.json of a
  * dataset or of a multiscale group (s0/attributes.json, ...), blocks at
  * 0/0/0, s0/1/0/2, ...; read by vv_n5_read and opened as the N5 format.
+ * Built with FUZZ_STORE_PRECOMPUTED (fuzz_precomputed.c), it is a
+ * Neuroglancer precomputed volume (src/io/store/precomputed.c): its info
+ * and the chunks of its scales (8_8_8/0-16_0-16_0-8, ...).
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -43,10 +46,14 @@
 #include "io/store/zarr.h"
 #include "volvis/volvis.h"
 
-#ifdef FUZZ_STORE_N5
+#if defined FUZZ_STORE_N5
 #define STORE_FORMAT VV_FORMAT_N5
 #define STORE_READ vv_n5_read
 #define STORE_DIR "in.n5"
+#elif defined FUZZ_STORE_PRECOMPUTED
+#define STORE_FORMAT VV_FORMAT_PRECOMPUTED
+#define STORE_READ vv_pc_read
+#define STORE_DIR "in.precomputed"
 #else
 #define STORE_FORMAT VV_FORMAT_OME_ZARR
 #define STORE_READ vv_ome_zarr_read

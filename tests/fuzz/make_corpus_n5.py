@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Seeds of fuzz_n5 (tests/fuzz/corpus/n5/): N5 stores tensorstore writes, packed.
+"""Seeds of fuzz_n5 and fuzz_precomputed: N5 stores and precomputed volumes tensorstore writes.
 
   .venv/bin/python tests/fuzz/make_corpus_n5.py      (from the repository root)
 
@@ -12,8 +12,15 @@ pixelResolution and each level's downsamplingFactors, or COSEM multiscales), and
 hostile stores made from them (a block cut short, a varlength block, object mode, a
 block of other dimensions or larger than blockSize, absurd sizes, a missing level).
 The voxels are crops of the real MR head (../shared/data/volumes/HeadMRVolume.raw,
-48 x 62 x 42 u8), so every seed is a few KB. Writes only tests/fuzz/corpus/n5/ts-*.
+48 x 62 x 42 u8), so every seed is a few KB.
+
+tests/fuzz/corpus/precomputed/: Neuroglancer precomputed volumes tensorstore's
+neuroglancer_precomputed driver writes (raw in two scales with a voxel_offset, chunks
+cut at the end; three channels; jpeg; a segmentation; raw chunks as gzip streams; a
+sharded and a compressed_segmentation scale, which the reader refuses), and hostile
+infos and chunks made from them. Writes only the ts-* seeds of those two folders.
 """
+import gzip
 import json
 import os
 import shutil
@@ -28,6 +35,7 @@ from corpus_common import head_crop, pack_store  # noqa: E402
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 OUT = os.path.join(ROOT, "tests", "fuzz", "corpus", "n5")
+PC_OUT = os.path.join(ROOT, "tests", "fuzz", "corpus", "precomputed")
 
 
 def write(path, arr, block, comp=None, extra=None):
@@ -46,9 +54,9 @@ def write(path, arr, block, comp=None, extra=None):
     return path
 
 
-def seed(name, root, prelude="# tensorstore n5\n"):
-    """The store at ROOT packed (attributes.json first) as corpus/n5/ts-NAME."""
-    with open(os.path.join(OUT, "ts-" + name), "wb") as f:
+def seed(name, root, prelude="# tensorstore n5\n", out=OUT):
+    """The store at ROOT packed (attributes.json or info first) as OUT/ts-NAME."""
+    with open(os.path.join(out, "ts-" + name), "wb") as f:
         f.write(pack_store(root, prelude))
 
 
@@ -157,5 +165,100 @@ def main():
         shutil.rmtree(tmp, ignore_errors=True)
 
 
+def pc_write(path, arr, res, chunk, offset=(0, 0, 0), encoding="raw", mtype="image",
+             create=True, **scale):
+    spec = {"driver": "neuroglancer_precomputed", "kvstore": {"driver": "file", "path": path},
+            "scale_metadata": {"size": list(arr.shape[:3]), "resolution": list(res),
+                               "encoding": encoding, "chunk_size": list(chunk),
+                               "voxel_offset": list(offset), **scale},
+            "create": True, "open": not create}
+    if create:
+        spec["multiscale_metadata"] = {"type": mtype, "data_type": str(arr.dtype),
+                                       "num_channels": int(arr.shape[3])}
+    t = ts.open(spec).result()
+    t[...] = arr
+    return path
+
+
+def pc_seed(name, root):
+    seed(name, root, "# tensorstore precomputed\n", PC_OUT)
+
+
+def precomputed():
+    os.makedirs(PC_OUT, exist_ok=True)
+    tmp = tempfile.mkdtemp(prefix="pcseeds")
+    try:
+        big = np.ascontiguousarray(head_crop(8, 10, 12).transpose(2, 1, 0))[..., None]
+        d = pc_write(os.path.join(tmp, "raw"), big.astype(np.uint16) * 50, (8, 8, 20), (8, 8, 4),
+                     (3, 5, 1))
+        pc_write(d, big[::2, ::2, ::2].astype(np.uint16) * 50, (16, 16, 40), (8, 8, 4),
+                 (1, 2, 0), create=False)
+        pc_seed("raw-two-scales", d)
+        seed("raw-two-scales-level1", d, "# tensorstore precomputed\n1\n", PC_OUT)
+        c3 = np.concatenate([big, 255 - big, big // 2], axis=3)
+        pc_seed("channels3", pc_write(os.path.join(tmp, "c3"), c3, (4, 4, 4), (8, 8, 8)))
+        seed("channels3-c2", os.path.join(tmp, "c3"), "# tensorstore precomputed\n0 2\n",
+             PC_OUT)
+        pc_seed("jpeg", pc_write(os.path.join(tmp, "jpeg"), big, (4, 4, 4), (8, 8, 4),
+                                 encoding="jpeg"))
+        pc_seed("jpeg-rgb", pc_write(os.path.join(tmp, "jpegrgb"), c3, (4, 4, 4), (8, 8, 4),
+                                     encoding="jpeg"))
+        seg = (big.astype(np.uint32) // 40)
+        pc_seed("segmentation", pc_write(os.path.join(tmp, "seg"), seg, (4, 4, 4), (8, 8, 8),
+                                         mtype="segmentation"))
+        pc_seed("segmentation-u64", pc_write(os.path.join(tmp, "seg64"), seg.astype(np.uint64),
+                                             (4, 4, 4), (8, 8, 8), mtype="segmentation"))
+        pc_seed("cseg", pc_write(os.path.join(tmp, "cseg"), seg, (4, 4, 4), (8, 8, 8),
+                                 encoding="compressed_segmentation", mtype="segmentation",
+                                 compressed_segmentation_block_size=[4, 4, 4]))
+        pc_seed("sharded", pc_write(os.path.join(tmp, "shard"), big, (4, 4, 4), (8, 8, 8),
+                                    sharding={"@type": "neuroglancer_uint64_sharded_v1",
+                                              "preshift_bits": 0, "hash": "identity",
+                                              "minishard_bits": 0, "shard_bits": 0,
+                                              "minishard_index_encoding": "gzip",
+                                              "data_encoding": "gzip"}))
+        # raw chunks as gzip streams
+        g = os.path.join(tmp, "gz")
+        shutil.copytree(os.path.join(tmp, "c3"), g)
+        sd = os.path.join(g, "4_4_4")
+        for f in os.listdir(sd):
+            with open(os.path.join(sd, f), "rb") as fh:
+                b = fh.read()
+            with open(os.path.join(sd, f), "wb") as fh:
+                fh.write(gzip.compress(b))
+        pc_seed("raw-gzip", g)
+        # hostile
+        for n, fn in {"size-negative": lambda i: i["scales"][0].update(size=[-1, 5, 5]),
+                      "size-huge": lambda i: i["scales"][0].update(size=[2 ** 45] * 3),
+                      "chunk-zero": lambda i: i["scales"][0].update(chunk_sizes=[[0, 8, 8]]),
+                      "no-scales": lambda i: i.update(scales=[]),
+                      "key-dotdot": lambda i: i["scales"][0].update(key="../x"),
+                      "channels-huge": lambda i: i.update(num_channels=1 << 30),
+                      "type-float16": lambda i: i.update(data_type="float16"),
+                      "offset-huge": lambda i: i["scales"][0].update(
+                          voxel_offset=[2 ** 62, 0, 0])}.items():
+            d = os.path.join(tmp, "bad-" + n)
+            shutil.copytree(os.path.join(tmp, "c3"), d)
+            f = os.path.join(d, "info")
+            with open(f) as fh:
+                info = json.load(fh)
+            fn(info)
+            with open(f, "w") as fh:
+                json.dump(info, fh)
+            pc_seed("bad-" + n, d)
+        d = os.path.join(tmp, "bad-short-chunk")
+        shutil.copytree(os.path.join(tmp, "c3"), d)
+        sd = os.path.join(d, "4_4_4")
+        f = os.path.join(sd, sorted(os.listdir(sd))[0])
+        with open(f, "rb") as fh:
+            b = fh.read()
+        with open(f, "wb") as fh:
+            fh.write(b[:77])
+        pc_seed("bad-short-chunk", d)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
 if __name__ == "__main__":
     main()
+    precomputed()

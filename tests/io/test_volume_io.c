@@ -69,6 +69,7 @@ test_format_names(void **state) {
     assert_non_null(
         strstr(vv_error_message(),
                "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr, hdf5, vvb, bdv, n5, "
+               "precomputed, "
                "vtk_grid, vtu, dx, plot3d, netcdf or mesh"));
 }
 
@@ -115,6 +116,7 @@ test_format_table(void **state) {
     assert_non_null(t[VV_FORMAT_HDF5 - 1]->open_store);
     assert_non_null(t[VV_FORMAT_BDV_XML - 1]->open_store);
     assert_non_null(t[VV_FORMAT_N5 - 1]->open_store);
+    assert_non_null(t[VV_FORMAT_PRECOMPUTED - 1]->open_store);
     assert_non_null(t[VV_FORMAT_VVB - 1]->open_store);
     assert_non_null(t[VV_FORMAT_VVB - 1]->open_bricks);
     assert_non_null(t[VV_FORMAT_NRRD - 1]->raw_layout);
@@ -123,12 +125,21 @@ test_format_table(void **state) {
     static const struct {
         vv_format id;
         const char *name;
-    } named[] = {
-        {VV_FORMAT_SLC, "slc"},       {VV_FORMAT_NRRD, "nrrd"},   {VV_FORMAT_NIFTI, "nifti"},
-        {VV_FORMAT_MHD, "mhd"},       {VV_FORMAT_VTK, "vtk"},     {VV_FORMAT_RAW, "raw"},
-        {VV_FORMAT_TIFF, "tiff"},     {VV_FORMAT_DICOM, "dicom"}, {VV_FORMAT_VTI, "vti"},
-        {VV_FORMAT_OME_ZARR, "zarr"}, {VV_FORMAT_HDF5, "hdf5"},   {VV_FORMAT_VVB, "vvb"},
-        {VV_FORMAT_BDV_XML, "bdv"},   {VV_FORMAT_N5, "n5"}};
+    } named[] = {{VV_FORMAT_SLC, "slc"},
+                 {VV_FORMAT_NRRD, "nrrd"},
+                 {VV_FORMAT_NIFTI, "nifti"},
+                 {VV_FORMAT_MHD, "mhd"},
+                 {VV_FORMAT_VTK, "vtk"},
+                 {VV_FORMAT_RAW, "raw"},
+                 {VV_FORMAT_TIFF, "tiff"},
+                 {VV_FORMAT_DICOM, "dicom"},
+                 {VV_FORMAT_VTI, "vti"},
+                 {VV_FORMAT_OME_ZARR, "zarr"},
+                 {VV_FORMAT_HDF5, "hdf5"},
+                 {VV_FORMAT_VVB, "vvb"},
+                 {VV_FORMAT_BDV_XML, "bdv"},
+                 {VV_FORMAT_N5, "n5"},
+                 {VV_FORMAT_PRECOMPUTED, "precomputed"}};
     for (size_t i = 0; i < sizeof named / sizeof named[0]; i++)
         assert_string_equal(t[named[i].id - 1]->name, named[i].name);
     /* the third-party parsers are marked for the sandbox */

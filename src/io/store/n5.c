@@ -484,25 +484,38 @@ zr_n5_decode(const zr_array *a, const unsigned char *src, size_t m, unsigned cha
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory for %zu bytes", what, bytes);
     vv_status s = n5_inflate(a, src + hdr, m - hdr, tmp, bytes, what);
     if (s == VV_OK) {
-        memset(out, 0, n);
-        /* rows along the array's last axis (N5's first): bs[0] voxels each */
-        uint64_t pos[ZR_MAX_DIM] = {0}; /* array axes 0 .. nd - 2 */
-        const size_t row = (size_t)bs[0] * a->esize;
-        for (uint64_t r = 0; r < elems / bs[0]; r++) {
-            uint64_t off = 0;
-            for (int i = 0; i < nd - 1; i++)
-                off = off * a->chunks[i] + pos[i];
-            off *= a->chunks[nd - 1];
-            memcpy(out + off * a->esize, tmp + r * row, row);
-            for (int i = nd - 2; i >= 0; i--) { /* the next row, C order */
-                if (++pos[i] < bs[nd - 1 - i])
-                    break;
-                pos[i] = 0;
-            }
-        }
+        uint64_t cut[ZR_MAX_DIM]; /* the array's order */
+        for (int i = 0; i < nd; i++)
+            cut[i] = bs[nd - 1 - i];
+        zr_place_cut(a, cut, tmp, out, n);
     }
     free(tmp);
     return s;
+}
+
+void
+zr_place_cut(const zr_array *a, const uint64_t *cut, const unsigned char *src, unsigned char *out,
+             size_t n) {
+    const int nd = a->ndim;
+    uint64_t elems = 1;
+    for (int i = 0; i < nd; i++)
+        elems *= cut[i];
+    memset(out, 0, n);
+    /* rows along the array's last axis: cut[nd - 1] voxels each */
+    uint64_t pos[ZR_MAX_DIM] = {0}; /* array axes 0 .. nd - 2 */
+    const size_t row = (size_t)cut[nd - 1] * a->esize;
+    for (uint64_t r = 0; r < elems / cut[nd - 1]; r++) {
+        uint64_t off = 0;
+        for (int i = 0; i < nd - 1; i++)
+            off = off * a->chunks[i] + pos[i];
+        off *= a->chunks[nd - 1];
+        memcpy(out + off * a->esize, src + r * row, row);
+        for (int i = nd - 2; i >= 0; i--) { /* the next row, C order */
+            if (++pos[i] < cut[i])
+                break;
+            pos[i] = 0;
+        }
+    }
 }
 
 /* ---- the format row -------------------------------------------------------------- */

@@ -13,8 +13,10 @@
 #include "volvis/sys/format.h"
 
 #define ZR_MAX_DIM 5
-/* zr_array.zarr_format of an N5 dataset (n5.c) */
+/* zr_array.zarr_format of an N5 dataset (n5.c), of a scale of a
+ * Neuroglancer precomputed volume (precomputed.c) */
 #define ZR_N5 5
+#define ZR_PRECOMPUTED 6
 #define ZR_JSON_MAX (16u << 20)
 #define ZR_CHUNK_MAX ((uint64_t)1 << 30)
 /* The most chunks a whole read looks for (each a file to open). */
@@ -85,6 +87,8 @@ typedef struct zr_array {
     int n5_has_res;
     double n5_res[ZR_MAX_DIM];
     char n5_unit[32];
+    /* precomputed: the scale's voxel_offset (x, y, z): its chunks' names */
+    int64_t pc_off[3];
     char sep;
     double fill;
     zr_axis axes[ZR_MAX_DIM];
@@ -151,8 +155,9 @@ vv_status vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], un
  * of a sharded array) into exactly @p n bytes at @p out: the v2
  * compressor, or the v3 codecs after the array-to-bytes one (transposes
  * undone). @p what names the chunk in errors. Reentrant. */
-vv_status vv_zr_decode_unit(const zr_array *a, const unsigned char *src, size_t m,
-                            unsigned char *out, size_t n, const char *what);
+vv_status vv_zr_decode_unit(const zr_array *a, const uint64_t idx[ZR_MAX_DIM],
+                            const unsigned char *src, size_t m, unsigned char *out, size_t n,
+                            const char *what);
 
 /* The read unit's grid position (all array axes) of spatial chunk @p L
  * at the layout's channel and step. */
@@ -313,6 +318,11 @@ vv_status zr_n5_parse_array(zr_array *a, void *j);
  * zero. @p what names the block in errors. Reentrant. */
 vv_status zr_n5_decode(const zr_array *a, const unsigned char *src, size_t m, unsigned char *out,
                        size_t n, const char *what);
+/* A block cut at the array's end (@p cut voxels along each of the array's
+ * axes, C order, at @p src) placed at the start of the whole chunk @p out
+ * (@p n bytes, a->chunks), the rest zero (N5 and precomputed blocks). */
+void zr_place_cut(const zr_array *a, const uint64_t *cut, const unsigned char *src,
+                  unsigned char *out, size_t n);
 /* N5: the key of the block at grid position @p idx (the array's axes):
  * its indices in N5 order, "/" between. */
 void zr_n5_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap);
@@ -322,6 +332,31 @@ int vv_n5_looks_like(const vv_format_probe *p, int deep);
 /* N5: vv_ome_zarr_read's contract for an N5 dataset or multiscale group
  * (errors prefixed "n5: NAME"). */
 vv_status vv_n5_read(vv_volume **out, const char *path, const vv_load_options *opt);
+
+/* Neuroglancer precomputed (precomputed.c). The volume's @p info (a
+ * json_t *) read as OME metadata: *za a new OME-NGFF multiscales object
+ * (axes c, z, y, x; each scale's key as its path, resolution and
+ * voxel_offset as scale and translation; "image-label" for a
+ * segmentation). Errors name info and the scale. */
+vv_status zr_pc_root(const zr_array *a, void *info, void **za);
+/* Precomputed: the scale whose key is a->prefix of @p info into @p a
+ * (axes c, z, y, x; chunk_sizes[0]; data_type; encoding raw or jpeg;
+ * sharded scales and compressed_segmentation refused by name). */
+vv_status zr_pc_parse_array(zr_array *a, void *info);
+/* Precomputed: the key of the chunk at grid position @p idx (c, z, y, x):
+ * "KEY/x0-x1_y0-y1_z0-z1" of voxel_offset-based voxel ranges. */
+void zr_pc_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap);
+/* Precomputed: the chunk at @p idx from its @p m stored bytes (raw, a
+ * gzip stream of raw, or jpeg) into exactly @p n bytes at @p out, the
+ * whole chunk (a chunk cut at the scale's end placed at its start, the
+ * rest zero). Reentrant. */
+vv_status zr_pc_decode(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], const unsigned char *src,
+                       size_t m, unsigned char *out, size_t n, const char *what);
+/* Precomputed: 1 when folder @p p holds an info naming a multiscale volume. */
+int vv_pc_looks_like(const vv_format_probe *p, int deep);
+/* Precomputed: vv_ome_zarr_read's contract (errors prefixed
+ * "precomputed: NAME"). */
+vv_status vv_pc_read(vv_volume **out, const char *path, const vv_load_options *opt);
 
 /* Frees @p a's shard index cache (zarr3.c). */
 void zr3_cache_free(zr_array *a);

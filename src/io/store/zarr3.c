@@ -825,7 +825,7 @@ zr3_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
     char what[2300];
     snprintf(what, sizeof what, "%s: inner chunk at bytes %llu..%llu", key, (unsigned long long)off,
              (unsigned long long)(off + len));
-    s = vv_zr_decode_unit(a, src, m, out, n, what);
+    s = vv_zr_decode_unit(a, idx, src, m, out, n, what);
     free(src);
     return s;
 }

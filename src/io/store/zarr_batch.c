@@ -249,7 +249,7 @@ decode_one(zb_job *j, uint64_t p, const bs_get *g, const unsigned char *src, siz
                      (unsigned long long)j->off[p], (unsigned long long)(j->off[p] + j->len[p]));
         else
             snprintf(what, sizeof what, "%s", g->key);
-        s = vv_zr_decode_unit(J->a, src, m, buf, J->cbytes, what);
+        s = vv_zr_decode_unit(J->a, x, src, m, buf, J->cbytes, what);
     }
     zr_dest *d = j->each ? &j->each[p] : NULL;
     if (s == VV_OK && d) {

@@ -197,8 +197,8 @@ memo_put(const zr_array *a, const char *key, const unsigned char *b, size_t n, i
  * is left out: the level's own read reports it. */
 static void
 prefetch_levels(const zr_array *a, json_t *dsl, int count) {
-    if (!bs_is_url(a->root) || count < 2)
-        return;
+    if (!bs_is_url(a->root) || count < 2 || a->zarr_format == ZR_PRECOMPUTED)
+        return; /* (a precomputed volume's levels are all in its info) */
     const int per = a->zarr_format == 2 ? 2 : 1;
     bs_get *g = calloc((size_t)(count * per), sizeof *g);
     char *keys = malloc((size_t)(count * per) * 1100);
@@ -337,6 +337,14 @@ static vv_status
 parse_zarray(zr_array *a) {
     vv_status s;
     char key[1100];
+    if (a->zarr_format == ZR_PRECOMPUTED) { /* a scale of the root's info */
+        json_t *j = load_json(a, "info", "info", 0, &s);
+        if (!j)
+            return s;
+        s = zr_pc_parse_array(a, j);
+        json_decref(j);
+        return s;
+    }
     if (a->zarr_format == ZR_N5) { /* an N5 level or dataset: n5.c */
         array_key(a, "attributes.json", key, sizeof key);
         json_t *j = load_json(a, key, "attributes.json", 0, &s);
@@ -512,8 +520,19 @@ root_metadata(const zr_array *a, json_t **za, const char **md) {
             return s;
         /* N5: a dataset, or a multiscale group read as OME-NGFF (n5.c) */
         json_t *n5 = load_json(a, "attributes.json", "attributes.json", 1, &s);
-        if (s != VV_OK || !n5)
+        if (s != VV_OK)
             return s;
+        if (!n5) { /* Neuroglancer precomputed: its info (precomputed.c) */
+            json_t *info = load_json(a, "info", "info", 1, &s);
+            if (s != VV_OK || !info)
+                return s;
+            *md = "info";
+            void *ms = NULL;
+            s = zr_pc_root(a, info, &ms);
+            *za = ms;
+            json_decref(info);
+            return s;
+        }
         *md = "attributes.json";
         void *ms = NULL;
         s = zr_n5_root(a, n5, &ms);
@@ -654,7 +673,10 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
     if ((s = root_metadata(a, &za, &md)) != VV_OK)
         return s;
     /* the levels' format */
-    a->zarr_format = !strcmp(md, "zarr.json") ? 3 : !strcmp(md, "attributes.json") ? ZR_N5 : 2;
+    a->zarr_format = !strcmp(md, "zarr.json")         ? 3
+                     : !strcmp(md, "attributes.json") ? ZR_N5
+                     : !strcmp(md, "info")            ? ZR_PRECOMPUTED
+                                                      : 2;
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     if (za && !json_object_get(za, "multiscales") &&
         (s = zr_refuse_group(root, za, md)) != VV_OK) { /* a v2 plate, well, labels group */
@@ -812,6 +834,10 @@ zr_chunk_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap) {
         zr_n5_key(a, idx, key, cap);
         return;
     }
+    if (a->zarr_format == ZR_PRECOMPUTED) {
+        zr_pc_key(a, idx, key, cap);
+        return;
+    }
     int len = snprintf(key, cap, "%s%s", a->prefix, a->prefix[0] ? "/" : "");
     const int c = a->zarr_format == 3 && a->key_default;
     if (c && len < (int)cap)
@@ -888,14 +914,16 @@ vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
         return s;
     if (file_bytes)
         *file_bytes = m;
-    s = vv_zr_decode_unit(a, src, m, out, n, key);
+    s = vv_zr_decode_unit(a, idx, src, m, out, n, key);
     free(src);
     return s;
 }
 
 vv_status
-vv_zr_decode_unit(const zr_array *a, const unsigned char *src, size_t m, unsigned char *out,
-                  size_t n, const char *what) {
+vv_zr_decode_unit(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], const unsigned char *src,
+                  size_t m, unsigned char *out, size_t n, const char *what) {
+    if (a->zarr_format == ZR_PRECOMPUTED)
+        return zr_pc_decode(a, idx, src, m, out, n, what);
     if (a->zarr_format == ZR_N5)
         return zr_n5_decode(a, src, m, out, n, what);
     if (a->zarr_format != 3)
@@ -914,7 +942,7 @@ vv_zr_decode_unit(const zr_array *a, const unsigned char *src, size_t m, unsigne
 
 uint64_t
 vv_zr_read_held(const zr_array *a, size_t n) {
-    if (a->zarr_format == ZR_N5)
+    if (a->zarr_format == ZR_N5 || a->zarr_format == ZR_PRECOMPUTED)
         return n; /* a block cut at the array's end, decoded before it is placed */
     if (a->zarr_format != 3)
         return 0; /* the v2 reader's count as it was: the decoded chunk */
@@ -1294,6 +1322,17 @@ vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) 
     vv_status s = read_store(out, path, opt);
     if (s != VV_OK)
         return vv_error_prefix(s, "zarr: %s", bs_name(path));
+    return VV_OK;
+}
+
+vv_status
+vv_pc_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+    if (!out || !path || !opt)
+        return vv_error_set(VV_ERR_INVALID, "precomputed: NULL argument");
+    *out = NULL;
+    vv_status s = read_store(out, path, opt);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "precomputed: %s", bs_name(path));
     return VV_OK;
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""N5 datasets and multiscale groups written by tensorstore, read by VolVis (issue 91).
+"""N5 and Neuroglancer precomputed volumes written by tensorstore, read by VolVis (issue 91).
 
-  n5_read_cli.py VOLVIS OUTDIR
+  n5_precomputed_cli.py VOLVIS OUTDIR
 
 Run with the .venv of scripts/install-deps.sh test (vv_pypi_test): tensorstore's n5
 driver writes, VolVis reads; numpy is the judge.
@@ -23,7 +23,14 @@ driver writes, VolVis reads; numpy is the judge.
 - hostile datasets and groups (a block shorter than its header, object mode, a block
   of other dimensions, a block larger than blockSize, a block that does not decode,
   absurd or missing sizes, unknown compression and data type, a group whose scales
-  name a level it lacks): one line naming the store, a non-zero exit, no output.
+  name a level it lacks): one line naming the store, a non-zero exit, no output;
+- Neuroglancer precomputed (tensorstore's neuroglancer_precomputed driver): the CT as
+  raw chunks in two scales with a voxel_offset (chunks cut at the end), each scale
+  voxel for voxel with its spacing (nm) and origin; 3 channels; a jpeg scale >= 35 dB
+  from its source and >= 45 dB from tensorstore's own decoding; a raw chunk stored as
+  gzip; a segmentation read as a label image; out of core as in memory; by URL as
+  local; sharded and compressed_segmentation scales refused by name; hostile infos
+  and chunks: one line, a non-zero exit, no output.
 """
 import json
 import os
@@ -231,7 +238,7 @@ if mem and ooc:
 
 # ---- by URL: nginx on loopback -------------------------------------------------------------------
 if nginx_path():
-    nginx, port, _ = start_nginx(OUT, OUT, "n5_read_cli")
+    nginx, port, _ = start_nginx(OUT, OUT, "n5_precomputed_cli")
     try:
         url = f"http://127.0.0.1:{port}"
         got, _, _ = read_back(f"{url}/c_gzip.n5")
@@ -317,4 +324,173 @@ def missing_level(d):
 
 hostile("nolevel", missing_level, "no dataset s1")
 
-check.finish("n5_read_cli")
+
+# ---- Neuroglancer precomputed --------------------------------------------------------------------
+def pc_write(path, arr, res, chunk, offset=(0, 0, 0), encoding="raw", mtype="image", create=True,
+             **scale):
+    """ARR (x, y, z, channel) as a scale of the precomputed volume at PATH (tensorstore)."""
+    spec = {"driver": "neuroglancer_precomputed", "kvstore": {"driver": "file", "path": path},
+            "scale_metadata": {"size": list(arr.shape[:3]), "resolution": list(res),
+                               "encoding": encoding, "chunk_size": list(chunk),
+                               "voxel_offset": list(offset), **scale},
+            "create": True, "open": not create}
+    if create:
+        spec["multiscale_metadata"] = {"type": mtype, "data_type": str(arr.dtype),
+                                       "num_channels": int(arr.shape[3])}
+    t = ts.open(spec).result()
+    t[...] = arr
+    return t
+
+
+def same4(got, want):
+    """GOT (z, y, x) equal to WANT (x, y, z)."""
+    return same(got, want)
+
+
+PCR = (957.0, 957.0, 1500.0)
+OFF = (7, 11, 3)
+pc = os.path.join(OUT, "ct.precomputed")
+shutil.rmtree(pc, ignore_errors=True)
+pc_write(pc, levels[0][..., None], PCR, (64, 64, 20), OFF)
+pc_write(pc, levels[1][..., None], (PCR[0] * 2, PCR[1] * 2, PCR[2] * 2), (64, 64, 20),
+         (OFF[0] // 2, OFF[1] // 2, OFF[2] // 2), create=False)
+p = volvis("info", pc)
+check(p.returncode == 0 and "format:       precomputed" in p.stdout and "levels:       2" in p.stdout,
+      f"precomputed: info names the format and 2 levels: {p.stdout[:300]} {p.stderr.strip()}")
+for lv, sc in ((0, 1), (1, 2)):
+    got, sp, org = read_back(pc, "--level", str(lv))
+    r = [v * sc for v in PCR]
+    o = [(OFF[k] // sc + 0.5) * r[k] - 0.5 * PCR[k] for k in range(3)]
+    check(same(got, levels[lv]), f"precomputed: scale {lv} voxel for voxel (chunks cut at the end)")
+    check(sp is not None and np.allclose(sp, r) and np.allclose(org, o),
+          f"precomputed: scale {lv}: spacing {sp} origin {org} (want {r}, {o})")
+pm = render("pc_mem", pc, "--level", "0", "--set", "refinement=off", "--tf", "100:1500")
+po = render("pc_ooc", pc, "--level", "0", "--memory-limit", "8M", "--tf", "100:1500")
+if pm and po:
+    d = psnr(pm, po)
+    check(d >= 50, f"precomputed: out of core {d:.1f} dB from in memory (>= 50)")
+
+# three channels
+a3 = rng.integers(0, 255, (X, Y, Z, 3)).astype(np.uint8)
+pc3 = os.path.join(OUT, "c3.precomputed")
+pc_write(pc3, a3, (4, 4, 4), (16, 16, 8))
+for c in range(3):
+    got, _, _ = read_back(pc3, "--channel", str(c))
+    check(same(got, a3[..., c]), f"precomputed: channel {c} of 3 voxel for voxel")
+
+# jpeg: >= 35 dB from the source, >= 45 dB from tensorstore's decoding
+u8 = np.clip((ct.astype(np.float64) + 1024) / 8, 0, 255).astype(np.uint8)[:, :, :64, None]
+pj = os.path.join(OUT, "jpeg.precomputed")
+tj = pc_write(pj, u8, PCR, (64, 64, 16), encoding="jpeg", jpeg_quality=90)
+ref = tj.read().result()[..., 0]
+got, _, _ = read_back(pj)
+if got is not None:
+    g = got.transpose(2, 1, 0).astype(np.float64)
+
+    def db(x, y):
+        m = ((x - y.astype(np.float64)) ** 2).mean()
+        return 99.0 if m == 0 else 10 * np.log10(255.0 ** 2 / m)
+
+    check(g.shape == u8[..., 0].shape and db(g, u8[..., 0]) >= 35,
+          f"jpeg: {db(g, u8[..., 0]):.1f} dB from its source (>= 35)")
+    check(db(g, ref) >= 45, f"jpeg: {db(g, ref):.1f} dB from tensorstore's decoding (>= 45)")
+
+# a raw chunk stored gzip-compressed (as cloud-volume writes and servers send)
+import gzip  # noqa: E402
+pg = os.path.join(OUT, "gz.precomputed")
+shutil.copytree(os.path.join(OUT, "c3.precomputed"), pg, dirs_exist_ok=True)
+sd = os.path.join(pg, json.load(open(os.path.join(pg, "info")))["scales"][0]["key"])
+for f in os.listdir(sd):
+    with open(os.path.join(sd, f), "rb") as fh:
+        b = fh.read()
+    with open(os.path.join(sd, f), "wb") as fh:
+        fh.write(gzip.compress(b))
+got, _, _ = read_back(pg, "--channel", "2")
+check(same(got, a3[..., 2]), "precomputed: gzip-compressed raw chunks voxel for voxel")
+
+# a segmentation: a label image
+seg = (np.arange(X * Y * Z).reshape(X, Y, Z) // 97 % 5).astype(np.uint32)[..., None]
+ps = os.path.join(OUT, "seg.precomputed")
+pc_write(ps, seg, (8, 8, 8), (16, 16, 16), mtype="segmentation")
+got, _, _ = read_back(ps)
+check(same(got, seg[..., 0]), "segmentation: voxel for voxel")
+p = volvis("info", ps)
+check(p.returncode == 0 and "label" in p.stdout.lower(),
+      f"segmentation: info says it is a label image: {p.stdout[:400]}")
+
+# by URL
+if nginx_path():
+    nginx, port, _ = start_nginx(OUT, OUT, "n5_precomputed_cli")
+    try:
+        got, _, _ = read_back(f"http://127.0.0.1:{port}/ct.precomputed", "--level", "1")
+        check(same(got, levels[1]), "precomputed by URL: scale 1 voxel for voxel")
+        pr = render("pc_url_ooc", f"http://127.0.0.1:{port}/ct.precomputed", "--level", "0",
+                    "--memory-limit", "8M", "--tf", "100:1500")
+        if pr and po:
+            check(psnr(pr, po) >= 99, f"precomputed by URL: the render equals local's "
+                  f"({psnr(pr, po):.1f} dB)")
+    finally:
+        stop_server(nginx)
+
+
+# refused by name: sharded, compressed_segmentation
+def refused(name, path, want):
+    out = os.path.join(OUT, name + ".nrrd")
+    p = volvis("convert", path, out, "--quiet")
+    check(p.returncode != 0 and len(p.stderr.strip().splitlines()) == 1 and want in p.stderr and
+          os.path.basename(path) in p.stderr and not os.path.exists(out),
+          f"{name}: exit {p.returncode}, {p.stderr.strip()!r} (wants {want!r})")
+
+
+psh = os.path.join(OUT, "sharded.precomputed")
+pc_write(psh, u8[:32, :32, :16], (8, 8, 8), (16, 16, 16),
+         sharding={"@type": "neuroglancer_uint64_sharded_v1", "preshift_bits": 0,
+                   "hash": "identity", "minishard_bits": 0, "shard_bits": 0,
+                   "minishard_index_encoding": "gzip", "data_encoding": "gzip"})
+refused("sharded", psh, "sharded")
+pcs = os.path.join(OUT, "cseg.precomputed")
+pc_write(pcs, seg, (8, 8, 8), (16, 16, 16), encoding="compressed_segmentation",
+         mtype="segmentation", compressed_segmentation_block_size=[8, 8, 8])
+refused("cseg", pcs, "compressed_segmentation")
+
+
+# hostile
+def pc_hostile(name, make, want):
+    d = os.path.join(OUT, f"badpc_{name}.precomputed")
+    shutil.rmtree(d, ignore_errors=True)
+    shutil.copytree(os.path.join(OUT, "c3.precomputed"), d)
+    make(d)
+    refused(f"badpc_{name}", d, want)
+
+
+def pc_info(d, fn):
+    f = os.path.join(d, "info")
+    with open(f) as fh:
+        info = json.load(fh)
+    fn(info)
+    with open(f, "w") as fh:
+        json.dump(info, fh)
+
+
+def pc_chunk(d, fn):
+    sd = os.path.join(d, "4_4_4")
+    f = os.path.join(sd, sorted(os.listdir(sd))[0])
+    with open(f, "rb") as fh:
+        b = fh.read()
+    with open(f, "wb") as fh:
+        fh.write(fn(b))
+
+
+pc_hostile("size", lambda d: pc_info(d, lambda i: i["scales"][0].update(size=[-1, 5, 5])),
+           "size")
+pc_hostile("huge", lambda d: pc_info(d, lambda i: i["scales"][0].update(size=[2 ** 50] * 3)),
+           "size")
+pc_hostile("chunk0", lambda d: pc_info(d, lambda i: i["scales"][0].update(
+    chunk_sizes=[[0, 16, 8]])), "chunk_sizes")
+pc_hostile("noscales", lambda d: pc_info(d, lambda i: i.update(scales=[])), "scales")
+pc_hostile("dtype", lambda d: pc_info(d, lambda i: i.update(data_type="float16")), "float16")
+pc_hostile("channels", lambda d: pc_info(d, lambda i: i.update(num_channels=0)), "num_channels")
+pc_hostile("short", lambda d: pc_chunk(d, lambda b: b[:100]), "bytes")
+pc_hostile("badgzip", lambda d: pc_chunk(d, lambda b: b"\x1f\x8b" + b[2:50]), "gzip")
+
+check.finish("n5_precomputed_cli")
