@@ -237,7 +237,9 @@ try:
     driver.save_screenshot(str(OUT / ("%s_after.png" % FRONT)))
     check(after != before, "the canvas shows a different frame after the drag (seq %d -> %d)"
           % (seq0, seq1))
-    check(any(k and k.startswith("raycast_1/") for k in kinds),
+    # a reduced frame: a ray-cast preview, or on a loaded machine the ladder's cheapest
+    # rung (the box), which the widget drops to when a preview comes too late
+    check(any(k and (k.startswith("raycast_1/") or k == "bbox") for k in kinds),
           "reduced frames were shown while dragging: %s" % sorted(k for k in kinds if k))
 
     # the Python side: the next cell prints the camera traits
