@@ -41,7 +41,7 @@ import sys
 try:
     import numpy as np
     import tensorstore as ts
-    from PIL import Image
+    from PIL import Image  # noqa: F401 (pyramid_common's psnr reads the PNGs with it)
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (bash scripts/install-deps.sh test makes .venv)")
     sys.exit(77)
@@ -49,6 +49,7 @@ except ImportError as e:  # pragma: no cover
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from cli_common import Checks, read_nrrd, run  # noqa: E402
 from http_common import nginx_path, start_nginx, stop_server  # noqa: E402
+from pyramid_common import psnr  # noqa: E402
 
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
 shutil.rmtree(OUT, ignore_errors=True)
@@ -101,15 +102,6 @@ def same(got, want):
     if got.shape != w.shape:
         return False
     return bool(np.array_equal(got.astype(np.float64), w.astype(np.float64)))
-
-
-def image(path):
-    return np.asarray(Image.open(path).convert("RGB"), dtype=np.float64)
-
-
-def psnr(a, b):
-    m = ((image(a) - image(b)) ** 2).mean()
-    return 99.0 if m == 0 else 10 * np.log10(255.0 ** 2 / m)
 
 
 def render(name, store, *args):
@@ -340,11 +332,6 @@ def pc_write(path, arr, res, chunk, offset=(0, 0, 0), encoding="raw", mtype="ima
     t = ts.open(spec).result()
     t[...] = arr
     return t
-
-
-def same4(got, want):
-    """GOT (z, y, x) equal to WANT (x, y, z)."""
-    return same(got, want)
 
 
 PCR = (957.0, 957.0, 1500.0)

@@ -390,6 +390,23 @@ zr_n5_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap) {
                         (unsigned long long)idx[i]);
 }
 
+int
+zr_gunzip(const unsigned char *src, size_t m, unsigned char *out, size_t n) {
+    if (m > UINT32_MAX || n > UINT32_MAX)
+        return 0;
+    z_stream z;
+    memset(&z, 0, sizeof z);
+    if (inflateInit2(&z, 32 + MAX_WBITS) != Z_OK)
+        return 0;
+    z.next_in = (unsigned char *)src;
+    z.avail_in = (uInt)m;
+    z.next_out = out;
+    z.avail_out = (uInt)n;
+    const int ok = inflate(&z, Z_FINISH) == Z_STREAM_END && z.avail_out == 0;
+    inflateEnd(&z);
+    return ok;
+}
+
 /* The compressed voxels @p src (@p m bytes) decoded by the dataset's
  * compression into exactly @p n bytes at @p out. */
 static vv_status
@@ -402,16 +419,7 @@ n5_inflate(const zr_array *a, const unsigned char *src, size_t m, unsigned char 
         if (ok)
             memcpy(out, src, n);
     } else if (!strcmp(c, "gzip")) { /* gzip, or zlib with useZlib: either header */
-        z_stream z;
-        memset(&z, 0, sizeof z);
-        if (m <= UINT32_MAX && n <= UINT32_MAX && inflateInit2(&z, 32 + MAX_WBITS) == Z_OK) {
-            z.next_in = (unsigned char *)src;
-            z.avail_in = (uInt)m;
-            z.next_out = out;
-            z.avail_out = (uInt)n;
-            ok = inflate(&z, Z_FINISH) == Z_STREAM_END && z.avail_out == 0;
-            inflateEnd(&z);
-        }
+        ok = zr_gunzip(src, m, out, n);
     } else if (!strcmp(c, "bzip2")) {
         unsigned int got = (unsigned int)n;
         ok = m <= UINT32_MAX && n <= UINT32_MAX &&
@@ -524,26 +532,17 @@ int
 vv_n5_looks_like(const vv_format_probe *p, int deep) {
     if (!p->is_dir || deep)
         return 0;
-    char f[4200];
-    struct stat st;
-    snprintf(f, sizeof f, "%s/attributes.json", p->path);
-    if (stat(f, &st) != 0 || !S_ISREG(st.st_mode))
-        return 0;
     /* a Zarr store beside (zarr.json, .zattrs, .zarray) is the Zarr row's */
+    char f[4200], head[8193];
+    struct stat st;
     static const char *const zarr[] = {"zarr.json", ".zattrs", ".zarray"};
     for (size_t i = 0; i < sizeof zarr / sizeof zarr[0]; i++) {
         snprintf(f, sizeof f, "%s/%s", p->path, zarr[i]);
         if (stat(f, &st) == 0)
             return 0;
     }
-    snprintf(f, sizeof f, "%s/attributes.json", p->path);
-    FILE *fp = fopen(f, "rb");
-    if (!fp)
+    if (!zr_file_head(p->path, "attributes.json", head, sizeof head))
         return 0;
-    char head[8193];
-    const size_t n = fread(head, 1, sizeof head - 1, fp);
-    fclose(fp);
-    head[n] = '\0';
     if (strstr(head, "\"dimensions\"") || strstr(head, "\"dataType\"") ||
         strstr(head, "\"blockSize\""))
         return 1; /* a dataset (its reader names what it lacks) */

@@ -31,9 +31,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <turbojpeg.h>
-#include <zlib.h>
 
 #include "core/internal.h"
 #include "io/store/pyramid.h"
@@ -292,19 +290,8 @@ pc_raw(const unsigned char *src, size_t m, unsigned char *out, size_t bytes, con
         memcpy(out, src, bytes);
         return VV_OK;
     }
-    if (m >= 2 && src[0] == 0x1f && src[1] == 0x8b && m <= UINT32_MAX && bytes <= UINT32_MAX) {
-        z_stream z;
-        memset(&z, 0, sizeof z);
-        int ok = 0;
-        if (inflateInit2(&z, 16 + MAX_WBITS) == Z_OK) {
-            z.next_in = (unsigned char *)src;
-            z.avail_in = (uInt)m;
-            z.next_out = out;
-            z.avail_out = (uInt)bytes;
-            ok = inflate(&z, Z_FINISH) == Z_STREAM_END && z.avail_out == 0;
-            inflateEnd(&z);
-        }
-        if (ok)
+    if (m >= 2 && src[0] == 0x1f && src[1] == 0x8b) {
+        if (zr_gunzip(src, m, out, bytes))
             return VV_OK;
         return vv_error_set(VV_ERR_FORMAT, "%s: the gzip stream does not decode to %zu bytes", what,
                             bytes);
@@ -345,20 +332,9 @@ zr_pc_decode(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], const unsigned c
 
 int
 vv_pc_looks_like(const vv_format_probe *p, int deep) {
-    if (!p->is_dir || deep)
-        return 0;
-    char f[4200];
-    struct stat st;
-    snprintf(f, sizeof f, "%s/info", p->path);
-    if (stat(f, &st) != 0 || !S_ISREG(st.st_mode))
-        return 0;
-    FILE *fp = fopen(f, "rb");
-    if (!fp)
-        return 0;
     char head[8193];
-    const size_t n = fread(head, 1, sizeof head - 1, fp);
-    fclose(fp);
-    head[n] = '\0';
+    if (!p->is_dir || deep || !zr_file_head(p->path, "info", head, sizeof head))
+        return 0;
     return strstr(head, "neuroglancer_multiscale_volume") != NULL ||
            (strstr(head, "\"scales\"") && strstr(head, "\"data_type\""));
 }

@@ -326,6 +326,15 @@ void zr_place_cut(const zr_array *a, const uint64_t *cut, const unsigned char *s
 /* N5: the key of the block at grid position @p idx (the array's axes):
  * its indices in N5 order, "/" between. */
 void zr_n5_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap);
+/* The first bytes of file @p name in folder @p dir (a regular file: a
+ * FIFO is not opened) into @p head (at most @p cap - 1 bytes,
+ * NUL-terminated); 0 when there is none. The format rows' looks_like
+ * tests (zarr_read.c, n5.c, precomputed.c). */
+int zr_file_head(const char *dir, const char *name, char *head, size_t cap);
+/* A gzip or zlib stream (either header) of @p m bytes at @p src inflated
+ * into exactly @p n bytes at @p out; 1 when it decodes to exactly that
+ * (N5 gzip blocks, precomputed chunks stored as gzip). Reentrant. */
+int zr_gunzip(const unsigned char *src, size_t m, unsigned char *out, size_t n);
 /* N5: 1 when @p dir holds an attributes.json of an N5 dataset, multiscale
  * group or container (the format row's looks_like). */
 int vv_n5_looks_like(const vv_format_probe *p, int deep);

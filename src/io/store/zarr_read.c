@@ -1314,43 +1314,36 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     return s;
 }
 
-vv_status
-vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+/* read_store behind the row named @p row: its arguments checked, its
+ * errors prefixed "ROW: NAME". */
+static vv_status
+read_as(const char *row, vv_volume **out, const char *path, const vv_load_options *opt) {
     if (!out || !path || !opt)
-        return vv_error_set(VV_ERR_INVALID, "zarr: NULL argument");
+        return vv_error_set(VV_ERR_INVALID, "%s: NULL argument", row);
     *out = NULL;
     vv_status s = read_store(out, path, opt);
     if (s != VV_OK)
-        return vv_error_prefix(s, "zarr: %s", bs_name(path));
+        return vv_error_prefix(s, "%s: %s", row, bs_name(path));
     return VV_OK;
+}
+
+vv_status
+vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+    return read_as("zarr", out, path, opt);
 }
 
 vv_status
 vv_pc_read(vv_volume **out, const char *path, const vv_load_options *opt) {
-    if (!out || !path || !opt)
-        return vv_error_set(VV_ERR_INVALID, "precomputed: NULL argument");
-    *out = NULL;
-    vv_status s = read_store(out, path, opt);
-    if (s != VV_OK)
-        return vv_error_prefix(s, "precomputed: %s", bs_name(path));
-    return VV_OK;
+    return read_as("precomputed", out, path, opt);
 }
 
 vv_status
 vv_n5_read(vv_volume **out, const char *path, const vv_load_options *opt) {
-    if (!out || !path || !opt)
-        return vv_error_set(VV_ERR_INVALID, "n5: NULL argument");
-    *out = NULL;
-    vv_status s = read_store(out, path, opt);
-    if (s != VV_OK)
-        return vv_error_prefix(s, "n5: %s", bs_name(path));
-    return VV_OK;
+    return read_as("n5", out, path, opt);
 }
 
-/* The first bytes of file @p name in folder @p dir (a regular file) into
- * @p head (NUL-terminated); 0 when there is none. */
-static int
-file_head(const char *dir, const char *name, char *head, size_t cap) {
+int
+zr_file_head(const char *dir, const char *name, char *head, size_t cap) {
     char f[4200];
     struct stat st;
     snprintf(f, sizeof f, "%s/%s", dir, name);
@@ -1389,7 +1382,7 @@ vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
     if (!buf)
         return 0;
     int yes = 0;
-    if (file_head(p->path, "zarr.json", buf, cap)) {
+    if (zr_file_head(p->path, "zarr.json", buf, cap)) {
         /* "node_type": "array", or a group naming multiscales */
         const char *nt = strstr(buf, "\"node_type\"");
         if (nt) {
@@ -1402,7 +1395,7 @@ vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
                        ome_group_key(buf)
                  : strstr(buf, "\"zarr_format\"") == NULL && strstr(buf, "\"ome\"") &&
                        ome_group_key(buf);
-    } else if (file_head(p->path, ".zattrs", buf, 4096))
+    } else if (zr_file_head(p->path, ".zattrs", buf, 4096))
         yes = strstr(buf, "\"multiscales\"") != NULL || ome_group_key(buf);
     free(buf);
     return yes;
