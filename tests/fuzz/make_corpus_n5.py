@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Seeds of fuzz_n5 and fuzz_precomputed: N5 stores and precomputed volumes tensorstore writes.
 
-  .venv/bin/python tests/fuzz/make_corpus_n5.py      (from the repository root)
+  .venv/bin/python tests/fuzz/make_corpus_n5.py [precomputed]   (from the repository root;
+  precomputed: its seeds alone)
 
 Each seed is an N5 store in fuzz_zarr.c's container ("--FILE <name>--" sections,
 attributes.json first): datasets tensorstore's n5 driver writes (every compression:
@@ -217,6 +218,15 @@ def precomputed():
                                               "minishard_bits": 0, "shard_bits": 0,
                                               "minishard_index_encoding": "gzip",
                                               "data_encoding": "gzip"}))
+        for n, h, enc, pre, mini, sh in (("sharded-murmur-gzip", "murmurhash3_x86_128", "gzip",
+                                          1, 1, 1),
+                                         ("sharded-identity-raw", "identity", "raw", 0, 2, 0)):
+            pc_seed(n, pc_write(os.path.join(tmp, n), big, (4, 4, 4), (4, 4, 4),
+                                sharding={"@type": "neuroglancer_uint64_sharded_v1",
+                                          "preshift_bits": pre, "hash": h,
+                                          "minishard_bits": mini, "shard_bits": sh,
+                                          "minishard_index_encoding": enc,
+                                          "data_encoding": enc}))
         # raw chunks as gzip streams
         g = os.path.join(tmp, "gz")
         shutil.copytree(os.path.join(tmp, "c3"), g)
@@ -260,5 +270,6 @@ def precomputed():
 
 
 if __name__ == "__main__":
-    main()
+    if sys.argv[1:] != ["precomputed"]:
+        main()
     precomputed()

@@ -29,8 +29,11 @@ driver writes, VolVis reads; numpy is the judge.
   voxel for voxel with its spacing (nm) and origin; 3 channels; a jpeg scale >= 35 dB
   from its source and >= 45 dB from tensorstore's own decoding; a raw chunk stored as
   gzip; a segmentation read as a label image; out of core as in memory; by URL as
-  local; sharded and compressed_segmentation scales refused by name; hostile infos
-  and chunks: one line, a non-zero exit, no output.
+  local; sharded scales (neuroglancer_uint64_sharded_v1: murmurhash3_x86_128 with gzip
+  indexes and data, identity raw, jpeg) voxel for voxel, out of core and by URL as
+  unsharded and local; compressed_segmentation refused by name; hostile infos, chunks
+  and shards (bits, hash, truncated, indexes past the shard, backwards, overlapping or
+  ragged, a chunk past the shard): one line, a non-zero exit, no output.
 """
 import json
 import os
@@ -371,13 +374,15 @@ pj = os.path.join(OUT, "jpeg.precomputed")
 tj = pc_write(pj, u8, PCR, (64, 64, 16), encoding="jpeg", jpeg_quality=90)
 ref = tj.read().result()[..., 0]
 got, _, _ = read_back(pj)
+
+
+def db(x, y):
+    m = ((x - y.astype(np.float64)) ** 2).mean()
+    return 99.0 if m == 0 else 10 * np.log10(255.0 ** 2 / m)
+
+
 if got is not None:
     g = got.transpose(2, 1, 0).astype(np.float64)
-
-    def db(x, y):
-        m = ((x - y.astype(np.float64)) ** 2).mean()
-        return 99.0 if m == 0 else 10 * np.log10(255.0 ** 2 / m)
-
     check(g.shape == u8[..., 0].shape and db(g, u8[..., 0]) >= 35,
           f"jpeg: {db(g, u8[..., 0]):.1f} dB from its source (>= 35)")
     check(db(g, ref) >= 45, f"jpeg: {db(g, ref):.1f} dB from tensorstore's decoding (>= 45)")
@@ -405,6 +410,44 @@ p = volvis("info", ps)
 check(p.returncode == 0 and "label" in p.stdout.lower(),
       f"segmentation: info says it is a label image: {p.stdout[:400]}")
 
+
+
+# sharded (neuroglancer_uint64_sharded_v1): the CT in both scales, murmurhash3_x86_128 with
+# gzip indexes and data; three channels by the identity hash, raw; jpeg in shards
+def sharding(h="murmurhash3_x86_128", enc="gzip", pre=1, mini=2, shard=2):
+    return {"@type": "neuroglancer_uint64_sharded_v1", "preshift_bits": pre, "hash": h,
+            "minishard_bits": mini, "shard_bits": shard, "minishard_index_encoding": enc,
+            "data_encoding": enc}
+
+
+psh = os.path.join(OUT, "ct_sharded.precomputed")
+pc_write(psh, levels[0][..., None], PCR, (64, 64, 20), OFF, sharding=sharding())
+pc_write(psh, levels[1][..., None], (PCR[0] * 2, PCR[1] * 2, PCR[2] * 2), (64, 64, 20),
+         (OFF[0] // 2, OFF[1] // 2, OFF[2] // 2), create=False, sharding=sharding(shard=1))
+check(any(f.endswith(".shard") for f in os.listdir(os.path.join(psh, os.listdir(psh)[0]))) or
+      any(f.endswith(".shard") for f in os.listdir(os.path.join(psh, os.listdir(psh)[1]))),
+      "sharded: tensorstore wrote .shard files")
+for lv in (0, 1):
+    got, _, _ = read_back(psh, "--level", str(lv))
+    check(same(got, levels[lv]), f"sharded (murmurhash3_x86_128, gzip): scale {lv} voxel for "
+          "voxel")
+psr = render("pc_sharded_ooc", psh, "--level", "0", "--memory-limit", "8M", "--tf", "100:1500")
+if psr and po:
+    check(psnr(psr, po) >= 99, f"sharded: out of core the render of the unsharded scale "
+          f"({psnr(psr, po):.1f} dB)")
+psi = os.path.join(OUT, "c3_sharded.precomputed")
+pc_write(psi, a3, (4, 4, 4), (16, 16, 8), sharding=sharding("identity", "raw", 0, 3, 1))
+for c in (0, 2):
+    got, _, _ = read_back(psi, "--channel", str(c))
+    check(same(got, a3[..., c]), f"sharded (identity, raw): channel {c} of 3 voxel for voxel")
+pjs = os.path.join(OUT, "jpeg_sharded.precomputed")
+tjs = pc_write(pjs, u8, PCR, (64, 64, 16), encoding="jpeg", jpeg_quality=90,
+               sharding=sharding(pre=0, mini=1, shard=1))
+got, _, _ = read_back(pjs)
+if got is not None:
+    check(db(got.transpose(2, 1, 0).astype(np.float64), tjs.read().result()[..., 0]) >= 45,
+          "sharded jpeg: >= 45 dB from tensorstore's decoding")
+
 # by URL
 if nginx_path():
     nginx, port, _ = start_nginx(OUT, OUT, "n5_precomputed_cli")
@@ -416,11 +459,19 @@ if nginx_path():
         if pr and po:
             check(psnr(pr, po) >= 99, f"precomputed by URL: the render equals local's "
                   f"({psnr(pr, po):.1f} dB)")
+        url = f"http://127.0.0.1:{port}/ct_sharded.precomputed"
+        got, _, _ = read_back(url, "--level", "0")
+        check(same(got, levels[0]), "sharded by URL: scale 0 voxel for voxel")
+        pu = render("pc_sharded_url_ooc", url, "--level", "0", "--memory-limit", "8M",
+                    "--tf", "100:1500")
+        if pu and psr:
+            check(psnr(pu, psr) >= 99, f"sharded by URL: the render equals local's "
+                  f"({psnr(pu, psr):.1f} dB)")
     finally:
         stop_server(nginx)
 
 
-# refused by name: sharded, compressed_segmentation
+# refused by name: compressed_segmentation
 def refused(name, path, want):
     out = os.path.join(OUT, name + ".nrrd")
     p = volvis("convert", path, out, "--quiet")
@@ -429,12 +480,6 @@ def refused(name, path, want):
           f"{name}: exit {p.returncode}, {p.stderr.strip()!r} (wants {want!r})")
 
 
-psh = os.path.join(OUT, "sharded.precomputed")
-pc_write(psh, u8[:32, :32, :16], (8, 8, 8), (16, 16, 16),
-         sharding={"@type": "neuroglancer_uint64_sharded_v1", "preshift_bits": 0,
-                   "hash": "identity", "minishard_bits": 0, "shard_bits": 0,
-                   "minishard_index_encoding": "gzip", "data_encoding": "gzip"})
-refused("sharded", psh, "sharded")
 pcs = os.path.join(OUT, "cseg.precomputed")
 pc_write(pcs, seg, (8, 8, 8), (16, 16, 16), encoding="compressed_segmentation",
          mtype="segmentation", compressed_segmentation_block_size=[8, 8, 8])
@@ -479,5 +524,63 @@ pc_hostile("dtype", lambda d: pc_info(d, lambda i: i.update(data_type="float16")
 pc_hostile("channels", lambda d: pc_info(d, lambda i: i.update(num_channels=0)), "num_channels")
 pc_hostile("short", lambda d: pc_chunk(d, lambda b: b[:100]), "bytes")
 pc_hostile("badgzip", lambda d: pc_chunk(d, lambda b: b"\x1f\x8b" + b[2:50]), "gzip")
+
+
+
+# hostile shards: one shard of 4 minishards, raw indexes (identity hash)
+def pc_shard_hostile(name, make, want):
+    d = os.path.join(OUT, f"badshard_{name}.precomputed")
+    shutil.rmtree(d, ignore_errors=True)
+    pc_write(d, a3[..., :1], (4, 4, 4), (16, 16, 8), sharding=sharding("identity", "raw", 0, 2, 0))
+    make(d)
+    refused(f"badshard_{name}", d, want)
+
+
+def shard_file(d, fn):
+    f = os.path.join(d, "4_4_4", "0.shard")
+    with open(f, "rb") as fh:
+        b = bytearray(fh.read())
+    with open(f, "wb") as fh:
+        fh.write(bytes(fn(b)))
+
+
+def set_u64(b, at, v):
+    b[at:at + 8] = int(v).to_bytes(8, "little")
+    return b
+
+
+def sh_info(**kw):
+    return lambda d: pc_info(d, lambda i: i["scales"][0]["sharding"].update(**kw))
+
+
+pc_shard_hostile("bits", sh_info(shard_bits=65), "shard_bits")
+pc_shard_hostile("sum", sh_info(minishard_bits=40, shard_bits=30), "over 64")
+pc_shard_hostile("minibits", sh_info(minishard_bits=40, shard_bits=0), "minishard_bits")
+pc_shard_hostile("hash", sh_info(hash="sha1"), "hash")
+pc_shard_hostile("type", sh_info(**{"@type": "neuroglancer_uint64_sharded_v2"}), "sharding")
+pc_shard_hostile("truncated", lambda d: shard_file(d, lambda b: b[:40]), "past its end")
+# minishard 0's index ends past the shard; ends before it starts; two overlap
+pc_shard_hostile("past", lambda d: shard_file(d, lambda b: set_u64(b, 56, len(b))),
+                 "past its end")
+pc_shard_hostile("backwards", lambda d: shard_file(
+    d, lambda b: set_u64(set_u64(b, 0, 50), 8, 10)), "minishard 0")
+pc_shard_hostile("overlap", lambda d: shard_file(
+    d, lambda b: set_u64(b, 16, int.from_bytes(b[0:8], "little"))), "overlap")
+# a minishard index of a size not 24 a chunk; a chunk whose bytes overlap its index, or
+# run past the shard
+pc_shard_hostile("ragged", lambda d: shard_file(
+    d, lambda b: set_u64(b, 8, int.from_bytes(b[8:16], "little") - 5)), "24 a chunk")
+
+
+def chunk_set(b, row, v):
+    lo = 64 + int.from_bytes(b[0:8], "little")
+    n = (int.from_bytes(b[8:16], "little") - int.from_bytes(b[0:8], "little")) // 24
+    return set_u64(b, lo + 8 * row * n, v)  # chunk 0's offset (row 1) or size (row 2)
+
+
+pc_shard_hostile("chunkbig", lambda d: shard_file(d, lambda b: chunk_set(b, 2, 1 << 40)),
+                 "overlap the minishard index")
+pc_shard_hostile("chunkpast", lambda d: shard_file(d, lambda b: chunk_set(b, 1, 1 << 40)),
+                 "past its end")
 
 check.finish("n5_precomputed_cli")

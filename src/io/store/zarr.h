@@ -89,6 +89,12 @@ typedef struct zr_array {
     char n5_unit[32];
     /* precomputed: the scale's voxel_offset (x, y, z): its chunks' names */
     int64_t pc_off[3];
+    /* precomputed sharding (neuroglancer_uint64_sharded_v1; pc_shard 0:
+     * one file a chunk): murmurhash3_x86_128 or identity, preshift,
+     * minishard and shard bits, gzip minishard indexes and data, the
+     * compressed Morton code's bits of x, y and z */
+    int pc_shard, pc_murmur, pc_preshift, pc_mbits, pc_sbits, pc_index_gzip, pc_data_gzip;
+    int pc_zbits[3];
     char sep;
     double fill;
     zr_axis axes[ZR_MAX_DIM];
@@ -350,11 +356,32 @@ vv_status vv_n5_read(vv_volume **out, const char *path, const vv_load_options *o
 vv_status zr_pc_root(const zr_array *a, void *info, void **za);
 /* Precomputed: the scale whose key is a->prefix of @p info into @p a
  * (axes c, z, y, x; chunk_sizes[0]; data_type; encoding raw or jpeg;
- * sharded scales and compressed_segmentation refused by name). */
+ * sharding; compressed_segmentation refused by name). */
 vv_status zr_pc_parse_array(zr_array *a, void *info);
 /* Precomputed: the key of the chunk at grid position @p idx (c, z, y, x):
- * "KEY/x0-x1_y0-y1_z0-z1" of voxel_offset-based voxel ranges. */
+ * "KEY/x0-x1_y0-y1_z0-z1" of voxel_offset-based voxel ranges, or, sharded,
+ * its shard's "KEY/<shard in hex>.shard". */
 void zr_pc_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap);
+/* Precomputed, sharded: the shard number of the chunk at @p idx. */
+uint64_t zr_pc_shard_of(const zr_array *a, const uint64_t *idx);
+/* Precomputed, sharded: where the chunk at @p idx is: its shard's key
+ * (zr_pc_key), bytes [*off, *off + *len) of it, or *missing = 1 (no shard,
+ * no such chunk in its minishard). The shard index and the minishard index
+ * are read by byte ranges and kept in a->cache; *file_bytes (may be NULL)
+ * gets the index bytes read. Errors (VV_ERR_FORMAT naming the shard and
+ * the field): indexes out of order, overlapping, past 2^62 or of a size
+ * not a multiple of their entries; VV_ERR_IO. Thread-safe. */
+vv_status zr_pc_locate(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], uint64_t *off,
+                       uint64_t *len, int *missing, uint64_t *file_bytes);
+/* Precomputed, sharded: zr_pc_locate of @p n chunks (@p idx: ZR_MAX_DIM
+ * numbers each) into off, len and missing (1 absent), the shard indexes
+ * and then the minishard indexes not kept read together, a window of
+ * bs_http_in_flight() requests at a time. Errors: zr_pc_locate's. */
+vv_status zr_pc_locate_many(const zr_array *a, uint64_t n, const uint64_t *idx, uint64_t *off,
+                            uint64_t *len, unsigned char *missing);
+/* Precomputed, sharded: vv_zr_read_chunk's contract. */
+vv_status zr_pc_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned char *out,
+                             size_t n, int *missing, uint64_t *file_bytes);
 /* Precomputed: the chunk at @p idx from its @p m stored bytes (raw, a
  * gzip stream of raw, or jpeg) into exactly @p n bytes at @p out, the
  * whole chunk (a chunk cut at the scale's end placed at its start, the
@@ -369,6 +396,19 @@ vv_status vv_pc_read(vv_volume **out, const char *path, const vv_load_options *o
 
 /* Frees @p a's shard index cache (zarr3.c). */
 void zr3_cache_free(zr_array *a);
+/* The shard index cache (zarr3.c; a->cache): up to 64 indexes, LRU, at
+ * most ZR_INDEX_CACHE_BYTES, thread-safe. An index (@p level, @p id) is
+ * @p count entries of @p w numbers (@p ent taken). _find: entry @p p of a
+ * w = 2 index into o[2], 1 when cached. _search: the entry of a w = 3
+ * index (sorted by its first number) whose first number is @p key, its
+ * other two into o[2]: 1 found, -1 cached but absent, 0 not cached. */
+struct zr_index_cache *zr_index_cache_new(void);
+int zr_index_cache_find(struct zr_index_cache *c, int level, uint64_t id, uint64_t p, uint64_t o[2],
+                        uint64_t *size);
+int zr_index_cache_search(struct zr_index_cache *c, int level, uint64_t id, uint64_t key,
+                          uint64_t o[2]);
+void zr_index_cache_put(struct zr_index_cache *c, int level, uint64_t id, uint64_t *ent,
+                        uint64_t count, uint64_t size, unsigned w);
 
 /* @p n voxels of type @p t at @p dst set to @p x (the fill value, cast). */
 void vv_zr_fill(void *dst, size_t n, vv_voxel_type t, double x);

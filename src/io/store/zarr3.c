@@ -38,15 +38,18 @@
 
 /* ---- the shard index cache ---- */
 
-#define ZR_CACHE_SLOTS 16
+#define ZR_CACHE_SLOTS 64
 
-/* One shard's decoded index: (offset, length) of each inner chunk, C order
- * over the shard's inner chunk grid; the shard's size in bytes. */
+/* One shard's decoded index: count entries of w numbers each (Zarr:
+ * (offset, length) of each inner chunk, C order over the shard's inner
+ * chunk grid; precomputed.c: a shard index's minishard ranges, a
+ * minishard's (chunk id, offset, size) sorted by id); the shard's size. */
 typedef struct zr_index {
     int level;
     uint64_t id; /* the shard's linear index over its level's grid */
     uint64_t *ent;
     uint64_t count, size, tick;
+    unsigned w;
 } zr_index;
 
 struct zr_index_cache {
@@ -55,8 +58,8 @@ struct zr_index_cache {
     zr_index e[ZR_CACHE_SLOTS];
 };
 
-static struct zr_index_cache *
-cache_new(void) {
+struct zr_index_cache *
+zr_index_cache_new(void) {
     struct zr_index_cache *c = calloc(1, sizeof *c);
     if (c && pthread_mutex_init(&c->mu, NULL) != 0) {
         free(c);
@@ -77,41 +80,69 @@ zr3_cache_free(zr_array *a) {
     a->cache = NULL;
 }
 
-/* Entry @p p of the cached index of shard (@p level, @p id) into o[2] and
- * its shard's size into *size; 0 when not cached. */
-static int
-cache_find(struct zr_index_cache *c, int level, uint64_t id, uint64_t p, uint64_t o[2],
-           uint64_t *size) {
+/* The slot of (@p level, @p id), or NULL; c->mu held. */
+static zr_index *
+cache_slot(struct zr_index_cache *c, int level, uint64_t id) {
+    for (int i = 0; i < ZR_CACHE_SLOTS; i++)
+        if (c->e[i].ent && c->e[i].level == level && c->e[i].id == id)
+            return &c->e[i];
+    return NULL;
+}
+
+int
+zr_index_cache_find(struct zr_index_cache *c, int level, uint64_t id, uint64_t p, uint64_t o[2],
+                    uint64_t *size) {
     int hit = 0;
     pthread_mutex_lock(&c->mu);
-    for (int i = 0; i < ZR_CACHE_SLOTS; i++) {
-        zr_index *e = &c->e[i];
-        if (e->ent && e->level == level && e->id == id && p < e->count) {
-            o[0] = e->ent[2 * p];
-            o[1] = e->ent[2 * p + 1];
-            *size = e->size;
-            e->tick = ++c->tick;
+    zr_index *e = cache_slot(c, level, id);
+    if (e && e->w == 2 && p < e->count) {
+        o[0] = e->ent[2 * p];
+        o[1] = e->ent[2 * p + 1];
+        *size = e->size;
+        e->tick = ++c->tick;
+        hit = 1;
+    }
+    pthread_mutex_unlock(&c->mu);
+    return hit;
+}
+
+int
+zr_index_cache_search(struct zr_index_cache *c, int level, uint64_t id, uint64_t key,
+                      uint64_t o[2]) {
+    int hit = 0;
+    pthread_mutex_lock(&c->mu);
+    zr_index *e = cache_slot(c, level, id);
+    if (e && e->w == 3) {
+        e->tick = ++c->tick;
+        hit = -1;
+        uint64_t lo = 0, hi = e->count;
+        while (lo < hi) { /* the first entry whose id is not below key */
+            const uint64_t mid = lo + (hi - lo) / 2;
+            if (e->ent[3 * mid] < key)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        if (lo < e->count && e->ent[3 * lo] == key) {
+            o[0] = e->ent[3 * lo + 1];
+            o[1] = e->ent[3 * lo + 2];
             hit = 1;
-            break;
         }
     }
     pthread_mutex_unlock(&c->mu);
     return hit;
 }
 
-/* Keeps @p ent (taken) as the index of shard (@p level, @p id), evicting
- * the least recently used while over ZR_INDEX_CACHE_BYTES. */
-static void
-cache_put(struct zr_index_cache *c, int level, uint64_t id, uint64_t *ent, uint64_t count,
-          uint64_t size) {
-    const uint64_t bytes = count * 16;
+void
+zr_index_cache_put(struct zr_index_cache *c, int level, uint64_t id, uint64_t *ent, uint64_t count,
+                   uint64_t size, unsigned w) {
+    const uint64_t bytes = count * w * 8;
     pthread_mutex_lock(&c->mu);
-    for (int i = 0; i < ZR_CACHE_SLOTS; i++)
-        if (c->e[i].ent && c->e[i].level == level && c->e[i].id == id) { /* another thread's */
-            pthread_mutex_unlock(&c->mu);
-            free(ent);
-            return;
-        }
+    if (cache_slot(c, level, id)) { /* another thread's */
+        pthread_mutex_unlock(&c->mu);
+        free(ent);
+        return;
+    }
     for (;;) {
         int victim = -1, empty = -1;
         for (int i = 0; i < ZR_CACHE_SLOTS; i++) {
@@ -121,7 +152,7 @@ cache_put(struct zr_index_cache *c, int level, uint64_t id, uint64_t *ent, uint6
                 victim = i;
         }
         if (empty >= 0 && c->bytes + bytes <= ZR_INDEX_CACHE_BYTES) {
-            c->e[empty] = (zr_index){level, id, ent, count, size, ++c->tick};
+            c->e[empty] = (zr_index){level, id, ent, count, size, ++c->tick, w};
             c->bytes += bytes;
             break;
         }
@@ -129,7 +160,7 @@ cache_put(struct zr_index_cache *c, int level, uint64_t id, uint64_t *ent, uint6
             free(ent);
             break;
         }
-        c->bytes -= c->e[victim].count * 16;
+        c->bytes -= c->e[victim].count * c->e[victim].w * 8;
         free(c->e[victim].ent);
         c->e[victim].ent = NULL;
     }
@@ -447,7 +478,7 @@ zr3_parse_array(zr_array *a, void *jv) {
     /* the read unit: the innermost chunk */
     for (int i = 0; i < a->ndim; i++)
         a->chunks[i] = a->cshape[a->nshard][i];
-    if (a->nshard > 0 && !(a->cache = cache_new()))
+    if (a->nshard > 0 && !(a->cache = zr_index_cache_new()))
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     return VV_OK;
 }
@@ -795,7 +826,7 @@ zr3_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
             count *= per;
         }
         uint64_t o[2], size = 0;
-        if (!cache_find(a->cache, l, id, p, o, &size)) {
+        if (!zr_index_cache_find(a->cache, l, id, p, o, &size)) {
             uint64_t *ent = NULL;
             vv_status s = load_index(a, l, key, off, len, count, &ent, &size, missing, file_bytes);
             if (s != VV_OK)
@@ -804,7 +835,7 @@ zr3_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
                 return VV_OK;
             o[0] = ent[2 * p];
             o[1] = ent[2 * p + 1];
-            cache_put(a->cache, l, id, ent, count, size);
+            zr_index_cache_put(a->cache, l, id, ent, count, size, 2);
         }
         if (o[0] == UINT64_MAX && o[1] == UINT64_MAX) {
             *missing = 1;
@@ -867,7 +898,7 @@ zr3_locate_many(const zr_array *a, uint64_t n, const uint64_t *idx, uint64_t *of
         }
         uint64_t o[2], size = 0;
         missing[i] = 0;
-        if (cache_find(a->cache, 0, id, p, o, &size)) {
+        if (zr_index_cache_find(a->cache, 0, id, p, o, &size)) {
             missing[i] = o[0] == UINT64_MAX && o[1] == UINT64_MAX;
             off[i] = o[0];
             len[i] = o[1];
@@ -925,7 +956,7 @@ zr3_locate_many(const zr_array *a, uint64_t n, const uint64_t *idx, uint64_t *of
                 len[i] = ent ? ent[2 * p + 1] : 0;
             }
             if (ent)
-                cache_put(a->cache, 0, need[first[u]].id, ent, count, g[u].size);
+                zr_index_cache_put(a->cache, 0, need[first[u]].id, ent, count, g[u].size, 2);
             free(g[u].out);
             g[u].out = NULL;
         }

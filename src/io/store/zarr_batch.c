@@ -21,7 +21,9 @@
  * of the memory budget: a fetcher waits for the decoders before starting a
  * window past it (one window always runs). Absent chunks (no shard, an
  * empty inner chunk) are the fill value without a request. Nested shards
- * are read chunk by chunk (copy_each).
+ * are read chunk by chunk (copy_each). A sharded precomputed scale is read
+ * the same way: zr_pc_locate_many reads its shard and minishard indexes,
+ * its chunks' ranges are merged into runs within a shard.
  */
 #include <math.h>
 #include <pthread.h>
@@ -43,6 +45,20 @@
 #define ZB_RUN_CHUNKS 4096
 
 struct zb_job;
+
+/* A precomputed scale in shards (neuroglancer_uint64_sharded_v1): its
+ * chunks located like a Zarr shard's inner chunks, but in a shard named
+ * by hash (zr_pc_key of the chunk itself). */
+static int
+pc_sharded(const zr_array *a) {
+    return a->zarr_format == ZR_PRECOMPUTED && a->pc_shard;
+}
+
+/* Chunks read as byte ranges of shards, located first. */
+static int
+sharded(const zr_array *a) {
+    return a->nshard == 1 || pc_sharded(a);
+}
 
 /* A run of a window as its read's bs_get.stale sees it. */
 typedef struct zb_ask {
@@ -244,7 +260,7 @@ decode_one(zb_job *j, uint64_t p, const bs_get *g, const unsigned char *src, siz
         s = vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes", J->cbytes);
     else if (!missing) {
         char what[ZB_KEY + 64];
-        if (J->a->nshard)
+        if (sharded(J->a))
             snprintf(what, sizeof what, "%s: inner chunk at bytes %llu..%llu", g->key,
                      (unsigned long long)j->off[p], (unsigned long long)(j->off[p] + j->len[p]));
         else
@@ -433,20 +449,20 @@ runs(zb_job *j) {
                                      (unsigned long long)n);
     for (uint64_t i = 0; s == VV_OK && i < n; i++) {
         const uint64_t p = j->fetch[i], *x = j->idx + p * ZR_MAX_DIM;
-        uint64_t obj = 0;
+        uint64_t obj = pc_sharded(a) ? zr_pc_shard_of(a, x) : 0;
         for (int d = 0; a->nshard == 1 && d < a->ndim; d++) {
             const uint64_t grid = (a->shape[d] + a->cshape[0][d] - 1) / a->cshape[0][d];
             obj = obj * grid + x[d] * a->chunks[d] / a->cshape[0][d];
         }
-        k[i] = (zb_key){a->nshard == 1 ? obj : i, j->off[p], i};
+        k[i] = (zb_key){sharded(a) ? obj : i, j->off[p], i};
     }
-    if (s == VV_OK && a->nshard == 1)
+    if (s == VV_OK && sharded(a))
         qsort(k, (size_t)n, sizeof *k, cmp_key);
     /* a run's bytes: at most ZB_RUN_MAX, and small enough that the read is
      * four requests in flight deep (a few large runs would leave the
      * connections idle and the decoders waiting), at least ZB_RUN_MIN */
     uint64_t total = 0;
-    for (uint64_t i = 0; s == VV_OK && a->nshard == 1 && i < n; i++)
+    for (uint64_t i = 0; s == VV_OK && sharded(a) && i < n; i++)
         total += j->len[j->fetch[i]];
     uint64_t cap = total / (4 * (uint64_t)bs_http_in_flight());
     cap = cap < ZB_RUN_MIN ? ZB_RUN_MIN : cap > ZB_RUN_MAX ? ZB_RUN_MAX : cap;
@@ -456,7 +472,7 @@ runs(zb_job *j) {
         j->order[i] = k[i].i;
         zb_run *last = nr ? &r[nr - 1] : NULL;
         const uint64_t lp = last ? j->fetch[k[i - 1].i] : 0;
-        if (last && a->nshard == 1 && k[i].obj == k[i - 1].obj && j->len[p] != ZR_ALL &&
+        if (last && sharded(a) && k[i].obj == k[i - 1].obj && j->len[p] != ZR_ALL &&
             j->off[p] == j->off[lp] + j->len[lp] && last->len + j->len[p] <= cap &&
             last->count < ZB_RUN_CHUNKS) {
             last->count++;
@@ -499,9 +515,11 @@ plan(zb_job *j, uint64_t n) {
         j->off[i] = 0;
         j->len[i] = ZR_ALL; /* an unsharded chunk: its whole object */
     }
-    if (a->nshard == 1) {
-        const vv_status s =
-            zr3_locate_many(a, n, j->idx, j->off, j->len, j->missing, bs_http_in_flight(), NULL);
+    if (a->nshard == 1 || pc_sharded(a)) {
+        const vv_status s = a->nshard == 1
+                                ? zr3_locate_many(a, n, j->idx, j->off, j->len, j->missing,
+                                                  bs_http_in_flight(), NULL)
+                                : zr_pc_locate_many(a, n, j->idx, j->off, j->len, j->missing);
         if (s != VV_OK)
             return s;
     }

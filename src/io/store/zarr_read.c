@@ -903,6 +903,8 @@ vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
         *file_bytes = 0;
     if (a->zarr_format == 3 && a->nshard > 0)
         return zr3_read_sharded(a, idx, out, n, missing, file_bytes);
+    if (a->zarr_format == ZR_PRECOMPUTED && a->pc_shard)
+        return zr_pc_read_sharded(a, idx, out, n, missing, file_bytes);
     char key[2200];
     zr_chunk_key(a, idx, key, sizeof key);
     unsigned char *src = NULL;
@@ -942,6 +944,8 @@ vv_zr_decode_unit(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], const unsig
 
 uint64_t
 vv_zr_read_held(const zr_array *a, size_t n) {
+    if (a->zarr_format == ZR_PRECOMPUTED && a->pc_shard && a->pc_data_gzip)
+        return 2 * (uint64_t)n; /* and the chunk's gzip data_encoding inflated */
     if (a->zarr_format == ZR_N5 || a->zarr_format == ZR_PRECOMPUTED)
         return n; /* a block cut at the array's end, decoded before it is placed */
     if (a->zarr_format != 3)
