@@ -89,6 +89,15 @@ vv_vec3 vv_tf_eval_color(const vv_tf *tf, double value);
  */
 vv_vec3 vv_label_color(uint32_t label);
 /**
+ * The key vv_label_color colours label id @p id (a voxel of a label volume:
+ * uint8 .. uint32, or uint64 read as a double): 0 for ids below 1/2 (the
+ * background), the id rounded below 2^32, else its two 32-bit halves
+ * xor-ed (1 where that is 0), so that the 64-bit ids of connectomics
+ * segmentations (MICrONS, H01: ids past 2^50) keep colours of their own.
+ * Thread-safe.
+ */
+uint32_t vv_label_key(double id);
+/**
  * Replaces the TF with a ramp: opacity 0 at lo rising linearly to
  * @p max_opacity at hi, colour @p color throughout.
  */

@@ -113,6 +113,17 @@ vv_tf_eval_opacity(const vv_tf *tf, double value) {
     return a->opacity + t * (b->opacity - a->opacity);
 }
 
+uint32_t
+vv_label_key(double id) {
+    if (!(id >= 0.5)) /* also NaN */
+        return 0;
+    if (id < 4294967295.5)
+        return (uint32_t)(id + 0.5);
+    const uint64_t x = id < 18446744073709551615.0 ? (uint64_t)id : UINT64_MAX;
+    const uint32_t k = (uint32_t)(x ^ (x >> 32));
+    return k ? k : 1;
+}
+
 vv_vec3
 vv_label_color(uint32_t label) {
     if (label == 0)

@@ -197,7 +197,7 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
                  * mode, the rounded value's in the projections */
                 double l = floor(x + 0.5);
                 a = l >= 1 ? 1.0 : 0.0;
-                col = vv_label_color(l >= 1 && l < 4294967296.0 ? (uint32_t)l : 0);
+                col = vv_label_color(vv_label_key(l));
             } else {
                 a = vv_tf_eval_opacity(&obj->tf, x);
                 col = vv_tf_eval_color(&obj->tf, x);

@@ -90,7 +90,7 @@ vv_vextra_label(const vv_volume *v, const float p[3]) {
             v->type, v->data, ((size_t)ix[2] * v->dims[1] + (size_t)ix[1]) * v->dims[0] + ix[0]);
         if (l >= 1 && w > bw) {
             bw = w;
-            best = l < 4294967296.0 ? (uint32_t)(l + 0.5) : 0;
+            best = vv_label_key(l);
         }
     }
     return best;

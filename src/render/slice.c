@@ -451,8 +451,8 @@ vv_slice_blend_channels(const vv_object *obj, const float *const *values, size_t
             if (obj->channels[c].labels) {
                 /* a label: its colour at half strength over the other channels */
                 const double l = floor(v + 0.5);
-                if (l >= 1 && l < 4294967296.0) {
-                    vv_vec3 col = vv_label_color((uint32_t)l);
+                if (l >= 1) {
+                    vv_vec3 col = vv_label_color(vv_label_key(l));
                     r += 0.5 * col.x;
                     g += 0.5 * col.y;
                     b += 0.5 * col.z;

@@ -31,7 +31,9 @@ driver writes, VolVis reads; numpy is the judge.
   gzip; a segmentation read as a label image; out of core as in memory; by URL as
   local; sharded scales (neuroglancer_uint64_sharded_v1: murmurhash3_x86_128 with gzip
   indexes and data, identity raw, jpeg) voxel for voxel, out of core and by URL as
-  unsharded and local; compressed_segmentation refused by name; hostile infos, chunks
+  unsharded and local; compressed_segmentation (uint32, uint64 in two channels with
+  blocks that do not divide the chunk, in shards) voxel for voxel; hostile infos, chunks,
+  compressed_segmentation (offsets, bits, tables past the chunk)
   and shards (bits, hash, truncated, indexes past the shard, backwards, overlapping or
   ragged, a chunk past the shard): one line, a non-zero exit, no output.
 """
@@ -471,7 +473,6 @@ if nginx_path():
         stop_server(nginx)
 
 
-# refused by name: compressed_segmentation
 def refused(name, path, want):
     out = os.path.join(OUT, name + ".nrrd")
     p = volvis("convert", path, out, "--quiet")
@@ -480,10 +481,57 @@ def refused(name, path, want):
           f"{name}: exit {p.returncode}, {p.stderr.strip()!r} (wants {want!r})")
 
 
+# compressed_segmentation: uint32; uint64 in two channels with blocks that do not divide
+# the chunk; uint64 in murmurhash3 shards with gzip
 pcs = os.path.join(OUT, "cseg.precomputed")
 pc_write(pcs, seg, (8, 8, 8), (16, 16, 16), encoding="compressed_segmentation",
          mtype="segmentation", compressed_segmentation_block_size=[8, 8, 8])
-refused("cseg", pcs, "compressed_segmentation")
+got, _, _ = read_back(pcs)
+check(same(got, seg[..., 0]), "compressed_segmentation uint32: voxel for voxel")
+seg2 = np.concatenate([seg.astype(np.uint64) + 2 ** 40, seg.astype(np.uint64) * 3], axis=3)
+seg2[rng.random(seg2.shape) < 0.01] = 123456789
+pcs2 = os.path.join(OUT, "cseg64.precomputed")
+pc_write(pcs2, seg2, (8, 8, 8), (16, 16, 16), encoding="compressed_segmentation",
+         mtype="segmentation", compressed_segmentation_block_size=[3, 5, 7])
+for c in (0, 1):
+    got, _, _ = read_back(pcs2, "--channel", str(c))
+    check(same(got, seg2[..., c]), f"compressed_segmentation uint64, blocks 3 x 5 x 7: channel "
+          f"{c} voxel for voxel")
+pcs3 = os.path.join(OUT, "cseg_sharded.precomputed")
+pc_write(pcs3, seg2[..., :1], (8, 8, 8), (16, 16, 16), encoding="compressed_segmentation",
+         mtype="segmentation", compressed_segmentation_block_size=[4, 4, 4],
+         sharding=sharding(pre=0, mini=1, shard=1))
+got, _, _ = read_back(pcs3)
+check(same(got, seg2[..., 0]), "compressed_segmentation in murmurhash3 shards: voxel for voxel")
+p = volvis("info", pcs3)
+check(p.returncode == 0 and "label" in p.stdout.lower(),
+      f"compressed_segmentation: info says it is a label image: {p.stdout[:300]}")
+
+
+def cseg_hostile(name, fn, want):
+    d = os.path.join(OUT, f"badcseg_{name}.precomputed")
+    shutil.rmtree(d, ignore_errors=True)
+    shutil.copytree(pcs, d)
+    sd = os.path.join(d, "8_8_8")
+    f = os.path.join(sd, sorted(os.listdir(sd))[0])
+    with open(f, "rb") as fh:
+        b = bytearray(fh.read())
+    with open(f, "wb") as fh:
+        fh.write(bytes(fn(b)))
+    refused(f"badcseg_{name}", d, want)
+
+
+def cseg_header(b, byte, v):
+    at = 4 * int.from_bytes(b[0:4], "little") + byte  # the first block's header
+    b[at] = v
+    return b
+
+
+cseg_hostile("offset", lambda b: b[:0] + (1 << 30).to_bytes(4, "little") + b[4:], "past the chunk")
+cseg_hostile("bits", lambda b: cseg_header(b, 3, 3), "bits a value")
+cseg_hostile("table", lambda b: cseg_header(cseg_header(cseg_header(b, 0, 255), 1, 255), 2, 255),
+             "past the chunk")
+cseg_hostile("ragged", lambda b: b[:-2], "32-bit words")
 
 
 # hostile

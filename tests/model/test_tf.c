@@ -1,4 +1,4 @@
-/* Transfer functions: evaluation, sorting, end holds, limits. */
+/* Transfer functions: evaluation, sorting, end holds, limits; label colour keys. */
 #include <math.h>
 
 #include "testutil.h"
@@ -109,12 +109,33 @@ test_ramp(void **state) {
     assert_near(vv_tf_eval_opacity(&tf, 100), 0.0, 0);
 }
 
+/* Label ids to colour keys: the background 0, ids below 2^32 themselves,
+ * 64-bit ids (connectomics segmentations) folded to non-zero keys that
+ * still tell neighbouring ids apart. */
+static void
+test_label_key(void **state) {
+    (void)state;
+    assert_int_equal(vv_label_key(0), 0);
+    assert_int_equal(vv_label_key(0.4), 0);
+    assert_int_equal(vv_label_key(-3), 0);
+    assert_int_equal(vv_label_key(NAN), 0);
+    assert_int_equal(vv_label_key(1), 1);
+    assert_int_equal(vv_label_key(4294967295.0), 4294967295u);
+    assert_int_equal(vv_label_key(4294967296.0), 1); /* halves 1 and 0 */
+    const double big = 1099511627776.0;              /* 2^40 */
+    assert_int_equal(vv_label_key(big), 256);
+    assert_int_not_equal(vv_label_key(big + 3), vv_label_key(big + 4));
+    assert_int_not_equal(vv_label_key(big + 3), 0);
+    assert_int_not_equal(vv_label_key(864691135561333258.0), 0); /* a MICrONS-sized id */
+    assert_int_equal(vv_label_key(1e30), 1); /* past 2^64: all ones, halves xor-ed to 0, so 1 */
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_empty), cmocka_unit_test(test_eval_and_sorting),
         cmocka_unit_test(test_step),  cmocka_unit_test(test_limits),
-        cmocka_unit_test(test_ramp),
+        cmocka_unit_test(test_ramp),  cmocka_unit_test(test_label_key),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

@@ -15,8 +15,14 @@
  *
  * Encodings read: raw (the voxels, or a gzip stream of them, as servers and
  * cloud-volume store them compressed), jpeg (uint8, 1 or 3 channels: an
- * image of x by y * z pixels, decoded by libturbojpeg). compressed_segmentation
- * is refused by name.
+ * image of x by y * z pixels, decoded by libturbojpeg), compressed_segmentation
+ * (uint32 or uint64 ids, src/sliceview/compressed_segmentation/README.md: per
+ * channel a 32-bit word offset, then a grid of blocks of
+ * compressed_segmentation_block_size, each a 64-bit header -- its lookup
+ * table's offset (24 bits, in 32-bit words), its bits a value (0, 1, 2, 4,
+ * 8, 16 or 32), its packed values' offset (32 bits) -- the values packed
+ * x fastest into little-endian 32-bit words, each an index into the
+ * block's table of ids).
  *
  * A sharded scale (neuroglancer_uint64_sharded_v1, src/datasource/
  * precomputed/sharded.md) keeps its chunks in 2^shard_bits files
@@ -309,11 +315,28 @@ zr_pc_parse_array(zr_array *a, void *info_v) {
     json_t *sh = json_object_get(sc, "sharding");
     if (sh && !json_is_null(sh) && (s = sharding_of(a, sh, i, size, cs)) != VV_OK)
         return s;
-    if (!enc || (strcmp(enc, "raw") && strcmp(enc, "jpeg")))
+    if (!enc ||
+        (strcmp(enc, "raw") && strcmp(enc, "jpeg") && strcmp(enc, "compressed_segmentation")))
         return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "info: scale %d: encoding \"%.40s\" (raw and jpeg are read; "
-                            "compressed_segmentation is not yet)",
+                            "info: scale %d: encoding \"%.40s\" (raw, jpeg and "
+                            "compressed_segmentation are read)",
                             i, enc ? enc : "(none)");
+    if (!strcmp(enc, "compressed_segmentation")) {
+        int64_t bs[3];
+        if (a->type != VV_U32 && !(a->type == VV_F64 && a->conv64 == 2))
+            return vv_error_set(VV_ERR_FORMAT,
+                                "info: scale %d: compressed_segmentation holds uint32 or uint64, "
+                                "not %s",
+                                i, dt);
+        if (!ints_of(json_object_get(sc, "compressed_segmentation_block_size"), 3, bs, 1, 1 << 16))
+            return vv_error_set(VV_ERR_FORMAT,
+                                "info: scale %d: compressed_segmentation_block_size is not 3 "
+                                "sizes (1 .. 65536)",
+                                i);
+        for (int k = 0; k < 3; k++)
+            a->pc_block[k] = (int)bs[k];
+        enc = "cseg";
+    }
     if (!strcmp(enc, "jpeg") && (a->type != VV_U8 || (nch != 1 && nch != 3)))
         return vv_error_set(VV_ERR_FORMAT,
                             "info: scale %d: jpeg holds uint8 of 1 or 3 channels, not %s of %lld",
@@ -893,6 +916,85 @@ pc_jpeg(const uint64_t cut[4], const unsigned char *src, size_t m, unsigned char
     return s;
 }
 
+static uint32_t
+le32(const unsigned char *p) {
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* A compressed_segmentation chunk of @p cut voxels (c, z, y, x) decoded
+ * into @p out (ids of a->esize bytes, little-endian, channels one after
+ * another): every offset, bit count and table entry checked against the
+ * chunk's @p m bytes. */
+static vv_status
+pc_cseg(const zr_array *a, const uint64_t cut[4], const unsigned char *src, size_t m,
+        unsigned char *out, const char *what) {
+    const uint64_t nch = cut[0], X = cut[3], Y = cut[2], Z = cut[1];
+    const uint64_t bx = (uint64_t)a->pc_block[0], by = (uint64_t)a->pc_block[1],
+                   bz = (uint64_t)a->pc_block[2];
+    const uint64_t gx = (X + bx - 1) / bx, gy = (Y + by - 1) / by, gz = (Z + bz - 1) / bz;
+    const size_t vb = a->esize, vw = vb / 4; /* an id's bytes and 32-bit words */
+    const uint64_t words = m / 4;
+    if (m % 4 || words < nch)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: compressed_segmentation of %zu bytes, not 32-bit words with an "
+                            "offset a channel",
+                            what, m);
+    for (uint64_t c = 0; c < nch; c++) {
+        const uint64_t base = le32(src + 4 * c);
+        if (base > words || 2 * gx * gy * gz > words - base)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: compressed_segmentation channel %llu's blocks at word %llu "
+                                "past the chunk's %llu",
+                                what, (unsigned long long)c, (unsigned long long)base,
+                                (unsigned long long)words);
+        const unsigned char *w0 = src + 4 * base;
+        const uint64_t nw = words - base;
+        unsigned char *oc = out + (size_t)(c * Z * Y * X) * vb;
+        for (uint64_t k = 0; k < gz; k++)
+            for (uint64_t j = 0; j < gy; j++)
+                for (uint64_t i = 0; i < gx; i++) {
+                    const uint64_t h = le64(w0 + 8 * (i + gx * (j + gy * k)));
+                    const uint64_t table = h & 0xffffff, voff = h >> 32;
+                    const unsigned bits = (unsigned)(h >> 24) & 0xff;
+                    const uint64_t nval = bx * by * bz;
+                    if (bits > 32 || (bits & (bits - 1)))
+                        return vv_error_set(VV_ERR_FORMAT,
+                                            "%s: compressed_segmentation block %llu,%llu,%llu: "
+                                            "%u bits a value (0, 1, 2, 4, 8, 16 or 32)",
+                                            what, (unsigned long long)i, (unsigned long long)j,
+                                            (unsigned long long)k, bits);
+                    if (voff > nw || (bits * nval + 31) / 32 > nw - voff || table >= nw)
+                        return vv_error_set(VV_ERR_FORMAT,
+                                            "%s: compressed_segmentation block %llu,%llu,%llu: "
+                                            "its values or lookup table past the chunk",
+                                            what, (unsigned long long)i, (unsigned long long)j,
+                                            (unsigned long long)k);
+                    const uint64_t ntab = (nw - table) / vw,
+                                   mask = bits == 32 ? UINT32_MAX : ((uint64_t)1 << bits) - 1;
+                    for (uint64_t z = 0; z < bz && k * bz + z < Z; z++)
+                        for (uint64_t y = 0; y < by && j * by + y < Y; y++)
+                            for (uint64_t x = 0; x < bx && i * bx + x < X; x++) {
+                                uint64_t v = 0;
+                                if (bits) {
+                                    const uint64_t bo = bits * (x + bx * (y + by * z));
+                                    v = (le32(w0 + 4 * (voff + bo / 32)) >> (bo % 32)) & mask;
+                                }
+                                if (v >= ntab)
+                                    return vv_error_set(
+                                        VV_ERR_FORMAT,
+                                        "%s: compressed_segmentation block %llu,%llu,%llu: "
+                                        "value %llu past its lookup table",
+                                        what, (unsigned long long)i, (unsigned long long)j,
+                                        (unsigned long long)k, (unsigned long long)v);
+                                const uint64_t at =
+                                    ((k * bz + z) * Y + j * by + y) * X + i * bx + x;
+                                memcpy(oc + at * vb, w0 + 4 * (table + v * vw), vb);
+                            }
+                }
+    }
+    return VV_OK;
+}
+
 /* A raw chunk's @p bytes from @p src (@p m bytes: the voxels, or a gzip
  * stream of them). */
 static vv_status
@@ -943,8 +1045,9 @@ zr_pc_decode(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], const unsigned c
         free(dec);
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory for %zu bytes", what, bytes);
     }
-    vv_status s = !strcmp(a->codec, "jpeg") ? pc_jpeg(cut, src, m, dst, what)
-                                            : pc_raw(src, m, dst, bytes, what);
+    vv_status s = !strcmp(a->codec, "jpeg")   ? pc_jpeg(cut, src, m, dst, what)
+                  : !strcmp(a->codec, "cseg") ? pc_cseg(a, cut, src, m, dst, what)
+                                              : pc_raw(src, m, dst, bytes, what);
     free(dec);
     if (s == VV_OK && !whole)
         zr_place_cut(a, cut, dst, out, n);
@@ -971,11 +1074,12 @@ const vv_format_record vv_format_precomputed = {
     .name = "precomputed",
     .title = "Neuroglancer precomputed",
     .extensions = pc_extensions,
-    .doc = "Neuroglancer precomputed (a folder or a URL with an info file): its scales as "
-           "levels (resolution in nm, voxel_offset), num_channels as channels, segmentations as "
-           "label images; raw (also gzip) and jpeg chunks, one file each or sharded "
-           "(neuroglancer_uint64_sharded_v1); read like OME-Zarr: one "
-           "level whole, or out of core by level of detail",
+    .doc =
+        "Neuroglancer precomputed (a folder or a URL with an info file): its scales as "
+        "levels (resolution in nm, voxel_offset), num_channels as channels, segmentations as "
+        "label images; raw (also gzip) and jpeg chunks, one file each or sharded "
+        "(neuroglancer_uint64_sharded_v1); compressed_segmentation labels; read like OME-Zarr: one "
+        "level whole, or out of core by level of detail",
     .flags = VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_THIRD_PARTY,
     .looks_like = vv_pc_looks_like,
     .read = vv_pc_read,

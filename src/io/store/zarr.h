@@ -95,6 +95,8 @@ typedef struct zr_array {
      * compressed Morton code's bits of x, y and z */
     int pc_shard, pc_murmur, pc_preshift, pc_mbits, pc_sbits, pc_index_gzip, pc_data_gzip;
     int pc_zbits[3];
+    /* precomputed compressed_segmentation (codec "cseg"): its block size, x, y, z */
+    int pc_block[3];
     char sep;
     double fill;
     zr_axis axes[ZR_MAX_DIM];
@@ -355,8 +357,8 @@ vv_status vv_n5_read(vv_volume **out, const char *path, const vv_load_options *o
  * segmentation). Errors name info and the scale. */
 vv_status zr_pc_root(const zr_array *a, void *info, void **za);
 /* Precomputed: the scale whose key is a->prefix of @p info into @p a
- * (axes c, z, y, x; chunk_sizes[0]; data_type; encoding raw or jpeg;
- * sharding; compressed_segmentation refused by name). */
+ * (axes c, z, y, x; chunk_sizes[0]; data_type; encoding raw, jpeg or
+ * compressed_segmentation; sharding). */
 vv_status zr_pc_parse_array(zr_array *a, void *info);
 /* Precomputed: the key of the chunk at grid position @p idx (c, z, y, x):
  * "KEY/x0-x1_y0-y1_z0-z1" of voxel_offset-based voxel ranges, or, sharded,
@@ -383,7 +385,8 @@ vv_status zr_pc_locate_many(const zr_array *a, uint64_t n, const uint64_t *idx, 
 vv_status zr_pc_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned char *out,
                              size_t n, int *missing, uint64_t *file_bytes);
 /* Precomputed: the chunk at @p idx from its @p m stored bytes (raw, a
- * gzip stream of raw, or jpeg) into exactly @p n bytes at @p out, the
+ * gzip stream of raw, jpeg or compressed_segmentation; gzip first when the
+ * scale's sharding says so) into exactly @p n bytes at @p out, the
  * whole chunk (a chunk cut at the scale's end placed at its start, the
  * rest zero). Reentrant. */
 vv_status zr_pc_decode(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], const unsigned char *src,

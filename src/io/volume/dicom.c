@@ -423,24 +423,28 @@ vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series
 /* ---- the format record ------------------------------------------------------ */
 
 /* A DICOMDIR or a DICOM file in a folder, or (at depth 0) in a subfolder:
- * @p ctx points at the depth. */
+ * ctx[0] the depth, ctx[1] 1 when a file without the preamble counts. */
 static int
 dicom_entry(const char *entry, const char *name, int is_dir, void *ctx) {
-    const int depth = *(const int *)ctx;
+    const int *c = ctx;
     if (is_dir) {
-        int deeper = depth + 1;
-        return depth < 1 && vv_format_folder_any(entry, dicom_entry, &deeper);
+        int deeper[2] = {c[0] + 1, c[1]};
+        return c[0] < 1 && vv_format_folder_any(entry, dicom_entry, deeper);
     }
-    return !strcasecmp(name, "DICOMDIR") || vv_format_detect(entry) == VV_FORMAT_DICOM;
+    return !strcasecmp(name, "DICOMDIR") ||
+           vv_format_detect_kind(entry, -1, c[1]) == VV_FORMAT_DICOM;
 }
 
-/* "DICM" after the 128-byte preamble, a folder of DICOM files; at @p deep
- * 1 a file without the preamble (old ACR-NEMA style) whose first element
- * reads as DICOM. */
+/* "DICM" after the 128-byte preamble, a folder holding such a file or a
+ * DICOMDIR; at @p deep 1 a file without the preamble (old ACR-NEMA style)
+ * whose first element reads as DICOM, and a folder of those (asked after
+ * every format's signature, so that the chunk of a store -- a precomputed
+ * volume's, an N5 dataset's -- whose first bytes read as an element does
+ * not make its folder a series). */
 static int
 dicom_looks_like(const vv_format_probe *p, int deep) {
     if (p->is_dir)
-        return !deep && vv_format_folder_any(p->path, dicom_entry, &(int){0});
+        return vv_format_folder_any(p->path, dicom_entry, (int[2]){0, deep});
     if (!deep)
         return p->n >= 132 && !memcmp(p->head + 128, "DICM", 4);
     return p->n > 0 && vv_dicom_sniff(p->path);

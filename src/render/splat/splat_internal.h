@@ -231,7 +231,7 @@ sp_label_entry(const float *e, float v, float buf[4]) {
     if (!(e[0] > 0))
         return e;
     const double r = floor((double)v + 0.5);
-    const vv_vec3 col = vv_label_color(r >= 1 && r < 4294967296.0 ? (uint32_t)r : 0);
+    const vv_vec3 col = vv_label_color(vv_label_key(r));
     buf[0] = e[0];
     buf[1] = e[0] * (float)col.x;
     buf[2] = e[0] * (float)col.y;
