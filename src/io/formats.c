@@ -310,8 +310,12 @@ vv_format_detect_kind(const char *path, int kind, int deep) {
     if (bs_is_url(path)) {
         if (kind >= 0 && kind != VV_DATA_VOLUME)
             return VV_FORMAT_UNKNOWN;
+        /* Neuroglancer's precomputed:// and n5:// name their rows */
+        const char *row = !strncasecmp(path, "precomputed://", 14) ? "precomputed"
+                          : !strncasecmp(path, "n5://", 5)         ? "n5"
+                                                                   : "zarr";
         for (int i = 0; i < N_BUILT_IN; i++)
-            if (!strcmp(table[i]->name, "zarr"))
+            if (!strcmp(table[i]->name, row))
                 return (vv_format)(i + 1);
         return VV_FORMAT_UNKNOWN;
     }

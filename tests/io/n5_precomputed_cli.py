@@ -31,7 +31,9 @@ driver writes, VolVis reads; numpy is the judge.
   gzip; a segmentation read as a label image; out of core as in memory; by URL as
   local; sharded scales (neuroglancer_uint64_sharded_v1: murmurhash3_x86_128 with gzip
   indexes and data, identity raw, jpeg) voxel for voxel, out of core and by URL as
-  unsharded and local; compressed_segmentation (uint32, uint64 in two channels with
+  unsharded and local; by precomputed://URL and gs://BUCKET (STORAGE_EMULATOR_HOST
+  pointing at nginx), n5://URL, and `volvis info` of N5 and precomputed URLs;
+  compressed_segmentation (uint32, uint64 in two channels with
   blocks that do not divide the chunk, in shards) voxel for voxel; hostile infos, chunks,
   compressed_segmentation (offsets, bits, tables past the chunk)
   and shards (bits, hash, truncated, indexes past the shard, backwards, overlapping or
@@ -248,6 +250,14 @@ if nginx_path():
         if rem and ooc:
             d = psnr(rem, ooc)
             check(d >= 99, f"by URL: the out-of-core render equals the local one ({d:.1f} dB)")
+        p = volvis("info", f"{url}/ct_viewer.n5")
+        check(p.returncode == 0 and "levels:       3" in p.stdout,
+              f"by URL: info of the group: {p.stdout[:200]} {p.stderr.strip()}")
+        p = volvis("info", f"n5://{url}/ct_viewer.n5")
+        check(p.returncode == 0 and "format:       n5" in p.stdout,
+              f"n5://URL: info names N5: {p.stdout[:200]} {p.stderr.strip()}")
+        got, _, _ = read_back(f"n5://{url}/ct_viewer.n5", "--level", "2")
+        check(same(got, levels[2]), "n5://URL: level 2 voxel for voxel")
     finally:
         stop_server(nginx)
 else:
@@ -469,6 +479,27 @@ if nginx_path():
         if pu and psr:
             check(psnr(pu, psr) >= 99, f"sharded by URL: the render equals local's "
                   f"({psnr(pu, psr):.1f} dB)")
+        # Neuroglancer's addresses: precomputed://URL; gs://BUCKET/PATH (anonymously at the
+        # bucket's HTTPS address; here nginx stands in through STORAGE_EMULATOR_HOST)
+        p = volvis("info", url)
+        check(p.returncode == 0 and "levels:       2" in p.stdout,
+              f"info by URL: {p.stdout[:200]} {p.stderr.strip()}")
+        p = volvis("info", "precomputed://" + url)
+        check(p.returncode == 0 and "format:       precomputed" in p.stdout,
+              f"precomputed://URL: info names the format: {p.stdout[:200]} {p.stderr.strip()}")
+        got, _, _ = read_back("precomputed://" + url, "--level", "1")
+        check(same(got, levels[1]), "precomputed://URL: scale 1 voxel for voxel")
+        os.environ["STORAGE_EMULATOR_HOST"] = f"http://127.0.0.1:{port}"
+        try:
+            got, _, _ = read_back("gs://ct_sharded.precomputed", "--level", "1")
+            check(same(got, levels[1]), "gs://BUCKET: scale 1 voxel for voxel")
+            pg = render("pc_gs_ooc", "precomputed://gs://ct_sharded.precomputed", "--level", "0",
+                        "--memory-limit", "8M", "--tf", "100:1500")
+            if pg and psr:
+                check(psnr(pg, psr) >= 99, f"precomputed://gs://BUCKET: the render equals "
+                      f"local's ({psnr(pg, psr):.1f} dB)")
+        finally:
+            del os.environ["STORAGE_EMULATOR_HOST"]
     finally:
         stop_server(nginx)
 

@@ -114,10 +114,30 @@ vv_path_is_url(const char *path) {
     return bs_is_url(path);
 }
 
+/* Neuroglancer's data source prefixes: the format, then the URL. */
+static const char *const source_prefixes[] = {"precomputed://", "n5://", "zarr://", "zarr2://",
+                                              "zarr3://"};
+
+const char *
+bs_url_unprefix(const char *url) {
+    for (int again = 1; url && again;) {
+        again = 0;
+        for (size_t i = 0; i < sizeof source_prefixes / sizeof *source_prefixes; i++) {
+            const size_t n = strlen(source_prefixes[i]);
+            if (!strncasecmp(url, source_prefixes[i], n)) {
+                url += n;
+                again = 1;
+            }
+        }
+    }
+    return url;
+}
+
 int
 bs_is_url(const char *path) {
+    path = bs_url_unprefix(path);
     return path && (!strncasecmp(path, "http://", 7) || !strncasecmp(path, "https://", 8) ||
-                    !strncasecmp(path, "s3://", 5));
+                    !strncasecmp(path, "s3://", 5) || !strncasecmp(path, "gs://", 5));
 }
 
 const char *

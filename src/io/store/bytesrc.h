@@ -69,8 +69,14 @@ typedef struct bs_local {
 } bs_local;
 void bs_local_init(bs_local *s, const char *root, const char *real);
 
-/* 1 when @p path names a remote store: http://, https:// or s3://. */
+/* 1 when @p path names a remote store: http://, https://, s3:// or gs://
+ * (a Google Cloud Storage bucket read anonymously at its public HTTPS
+ * address), also behind Neuroglancer's precomputed://, n5://, zarr://,
+ * zarr2:// or zarr3:// (bs_url_unprefix). */
 int bs_is_url(const char *path);
+/* @p url past Neuroglancer's data source prefixes (precomputed://,
+ * n5://, zarr://, zarr2://, zarr3://): the URL itself. */
+const char *bs_url_unprefix(const char *url);
 
 /* The name of store @p path in messages: a URL whole, a local path's base name. */
 const char *bs_name(const char *path);
@@ -140,10 +146,13 @@ typedef struct bs_target {
     char cred_from[128]; /* where the credentials came from (never the credentials) */
 } bs_target;
 
-/* Parses @p url into @p t: http(s):// (an S3 virtual-host or path-style
- * address of amazonaws.com, or an address under @p endpoint, is S3), or
- * s3://bucket/key (path-style under @p endpoint when given, else the
- * bucket's virtual host in the region). @p endpoint (AWS_ENDPOINT_URL) and
+/* Parses @p url (past bs_url_unprefix's prefixes) into @p t: http(s)://
+ * (an S3 virtual-host or path-style address of amazonaws.com, or an address
+ * under @p endpoint, is S3), s3://bucket/key (path-style under @p endpoint
+ * when given, else the bucket's virtual host in the region), or
+ * gs://bucket/key, read as https://storage.googleapis.com/bucket/key (or,
+ * with STORAGE_EMULATOR_HOST set, as Google's client libraries do, under
+ * that address). @p endpoint (AWS_ENDPOINT_URL) and
  * @p region (AWS_REGION) may be NULL. Credentials are not looked up here.
  * Errors: VV_ERR_INVALID (a malformed URL, naming it). */
 vv_status bs_target_parse(bs_target *t, const char *url, const char *endpoint, const char *region);

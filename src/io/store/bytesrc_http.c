@@ -191,9 +191,24 @@ ends_with(const char *s, const char *suf) {
 vv_status
 bs_target_parse(bs_target *t, const char *url, const char *endpoint, const char *region) {
     memset(t, 0, sizeof *t);
-    char clean[4096];
+    char clean[4096], gs[4096];
+    url = bs_url_unprefix(url);
     if (strlen(url) >= sizeof clean - 1)
         return vv_error_set(VV_ERR_LIMIT, "URL too long (%zu bytes)", strlen(url));
+    if (!strncasecmp(url, "gs://", 5)) { /* a public bucket, anonymously */
+        const char *emu = getenv("STORAGE_EMULATOR_HOST");
+        char host[1024];
+        snprintf(host, sizeof host, "%s", emu && *emu ? emu : "https://storage.googleapis.com");
+        trim_slashes(host);
+        if (strncasecmp(host, "http://", 7) && strncasecmp(host, "https://", 8))
+            return vv_error_set(VV_ERR_INVALID,
+                                "STORAGE_EMULATOR_HOST \"%.200s\" is not an http(s) URL", host);
+        if (url[5] == '\0' || url[5] == '/')
+            return vv_error_set(VV_ERR_INVALID, "%.300s: no bucket", url);
+        if (snprintf(gs, sizeof gs, "%s/%s", host, url + 5) >= (int)sizeof gs - 1)
+            return vv_error_set(VV_ERR_LIMIT, "URL too long (%zu bytes)", strlen(url));
+        url = gs;
+    }
     strip_userinfo(url, clean, sizeof clean);
     trim_slashes(clean);
     snprintf(t->shown, sizeof t->shown, "%s", clean);

@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include <jansson.h>
 
@@ -319,7 +320,31 @@ contents_get(const char *path, vv_ome_zarr_contents *out) {
     json_t *attrs = NULL;
     char md[700];
     int array = 0;
+    /* an N5 or precomputed store (by URL the Zarr row reads them too): one
+     * image, its metadata the reader's */
+    if (!strncasecmp(path, "precomputed://", 14) || !strncasecmp(path, "n5://", 5)) {
+        out->kind = VV_OME_ZARR_IMAGE;
+        free(a);
+        return VV_OK;
+    }
     vv_status s = group_attrs(a, "", &attrs, md, sizeof md, &array);
+    if (s == VV_OK && !attrs && !array) {
+        static const char *const other[] = {"attributes.json", "info"};
+        int found = 0;
+        for (int i = 0; s == VV_OK && i < 2 && !found; i++) {
+            unsigned char *b = NULL;
+            size_t n = 0;
+            int missing = 1;
+            s = zr_store_get(a, other[i], 0, 0, 0, &b, &n, NULL, &missing);
+            free(b);
+            found = s == VV_OK && !missing;
+        }
+        if (found) {
+            out->kind = VV_OME_ZARR_IMAGE;
+            free(a);
+            return VV_OK;
+        }
+    }
     json_t *pl = json_object_get(attrs, "plate"), *well = json_object_get(attrs, "well");
     if (s != VV_OK) {
         ;

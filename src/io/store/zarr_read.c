@@ -508,18 +508,22 @@ apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *md,
  * names the file. */
 static vv_status
 root_metadata(const zr_array *a, json_t **za, const char **md) {
-    vv_status s;
+    vv_status s = VV_OK;
     *za = NULL;
     *md = ".zattrs";
-    json_t *z3 = load_json(a, "zarr.json", "zarr.json", 1, &s);
+    /* Neuroglancer's precomputed:// and n5:// name the format: its
+     * metadata alone is asked for */
+    const int pc_only = !strncasecmp(a->root, "precomputed://", 14);
+    const int n5_only = !strncasecmp(a->root, "n5://", 5);
+    json_t *z3 = pc_only || n5_only ? NULL : load_json(a, "zarr.json", "zarr.json", 1, &s);
     if (s != VV_OK)
         return s;
     if (!z3) {
-        *za = load_json(a, ".zattrs", ".zattrs", 1, &s);
+        *za = pc_only || n5_only ? NULL : load_json(a, ".zattrs", ".zattrs", 1, &s);
         if (s != VV_OK || *za)
             return s;
         /* N5: a dataset, or a multiscale group read as OME-NGFF (n5.c) */
-        json_t *n5 = load_json(a, "attributes.json", "attributes.json", 1, &s);
+        json_t *n5 = pc_only ? NULL : load_json(a, "attributes.json", "attributes.json", 1, &s);
         if (s != VV_OK)
             return s;
         if (!n5) { /* Neuroglancer precomputed: its info (precomputed.c) */
