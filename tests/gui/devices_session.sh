@@ -93,7 +93,10 @@ cat > "$OUT/client.py" <<'PY'
 import os, socket, sys, time
 out, path = sys.argv[1], sys.argv[2]
 def wait_for(name):
-    for _ in range(600):
+    # the session's steps between two marks wait for settled frames (each up
+    # to 120 s under ASan beside another test): ten minutes, then give up
+    end = time.monotonic() + 600
+    while time.monotonic() < end:
         if os.path.exists(os.path.join(out, name)):
             return
         time.sleep(0.05)
