@@ -439,14 +439,6 @@ zr_pc_shard_of(const zr_array *a, const uint64_t *idx) {
     return a->pc_mbits >= 64 ? 0 : (h >> a->pc_mbits) & low_mask(a->pc_sbits);
 }
 
-static uint64_t
-le64(const unsigned char *p) {
-    uint64_t x = 0;
-    for (int i = 7; i >= 0; i--)
-        x = x << 8 | p[i];
-    return x;
-}
-
 /* A gzip stream of @p m bytes inflated into a new buffer *out of *n
  * bytes (at most @p cap). */
 static vv_status
@@ -520,8 +512,8 @@ parse_shard_index(const zr_array *a, const char *key, const unsigned char *raw,
     uint64_t *ent = malloc(count * 16), *sorted = malloc(count * 16);
     vv_status s = ent && sorted ? VV_OK : vv_error_set(VV_ERR_NOMEM, "%s: out of memory", key);
     for (uint64_t i = 0; s == VV_OK && i < count; i++) {
-        ent[2 * i] = le64(raw + 16 * i);
-        ent[2 * i + 1] = le64(raw + 16 * i + 8);
+        ent[2 * i] = zr_le64(raw + 16 * i);
+        ent[2 * i + 1] = zr_le64(raw + 16 * i + 8);
         if (ent[2 * i + 1] < ent[2 * i] || ent[2 * i + 1] > PC_MAX_OFFSET)
             s = vv_error_set(VV_ERR_FORMAT,
                              "%s: shard index: minishard %llu's index at bytes %llu..%llu", key,
@@ -567,8 +559,8 @@ parse_minishard(const zr_array *a, const char *key, uint64_t mini, const unsigne
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", key);
     uint64_t id = 0, end = ib;
     for (uint64_t i = 0; i < n; i++) {
-        const uint64_t did = le64(raw + 8 * i), doff = le64(raw + 8 * (n + i)),
-                       size = le64(raw + 8 * (2 * n + i));
+        const uint64_t did = zr_le64(raw + 8 * i), doff = zr_le64(raw + 8 * (n + i)),
+                       size = zr_le64(raw + 8 * (2 * n + i));
         const uint64_t start = end + doff;
         if ((i && did == 0) || did > UINT64_MAX - id || doff > PC_MAX_OFFSET ||
             size > PC_MAX_OFFSET || start > PC_MAX_OFFSET - size ||
@@ -953,7 +945,7 @@ pc_cseg(const zr_array *a, const uint64_t cut[4], const unsigned char *src, size
         for (uint64_t k = 0; k < gz; k++)
             for (uint64_t j = 0; j < gy; j++)
                 for (uint64_t i = 0; i < gx; i++) {
-                    const uint64_t h = le64(w0 + 8 * (i + gx * (j + gy * k)));
+                    const uint64_t h = zr_le64(w0 + 8 * (i + gx * (j + gy * k)));
                     const uint64_t table = h & 0xffffff, voff = h >> 32;
                     const unsigned bits = (unsigned)(h >> 24) & 0xff;
                     const uint64_t nval = bx * by * bz;

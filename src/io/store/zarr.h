@@ -55,6 +55,15 @@ typedef struct zr_chain {
 
 struct zr_index_cache;
 
+/* The little-endian 64-bit number at @p p (shard indexes). */
+static inline uint64_t
+zr_le64(const unsigned char *p) {
+    uint64_t x = 0;
+    for (int i = 7; i >= 0; i--)
+        x = x << 8 | p[i];
+    return x;
+}
+
 /* One level's array and what the metadata says of it. */
 typedef struct zr_array {
     char dir[4096];

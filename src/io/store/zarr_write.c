@@ -652,14 +652,6 @@ pread_all(int fd, void *buf, size_t n, off_t off) {
     return 0;
 }
 
-static uint64_t
-le64(const unsigned char *p) {
-    uint64_t x = 0;
-    for (int i = 7; i >= 0; i--)
-        x = x << 8 | p[i];
-    return x;
-}
-
 static void
 put_le64(unsigned char *p, uint64_t x) {
     for (int i = 0; i < 8; i++, x >>= 8)
@@ -696,7 +688,7 @@ read_prev_chunk(const box_feed *f, const zarr_spec *z, int cx, int cy, int cz, c
         else
             err = pread_all(fd, e, 16, st.st_size - 4 - (off_t)(n_in * 16) + (off_t)(i * 16));
         if (!err) {
-            const uint64_t o = le64(e), n = le64(e + 8);
+            const uint64_t o = zr_le64(e), n = zr_le64(e + 8);
             if (o > (uint64_t)st.st_size || n > (uint64_t)st.st_size - o)
                 err = EILSEQ; /* (all ones: never written for a chunk inside the level) */
             off = (off_t)o;
