@@ -32,7 +32,8 @@ driver writes, VolVis reads; numpy is the judge.
   local; sharded scales (neuroglancer_uint64_sharded_v1: murmurhash3_x86_128 with gzip
   indexes and data, identity raw, jpeg) voxel for voxel, out of core and by URL as
   unsharded and local; by precomputed://URL and gs://BUCKET (STORAGE_EMULATOR_HOST
-  pointing at nginx), n5://URL, and `volvis info` of N5 and precomputed URLs;
+  pointing at nginx), n5://URL, and `volvis info` of N5 and precomputed URLs; a frame of
+  the coarse scale alone (--lod 1) asks nothing of the fine scale's shards;
   compressed_segmentation (uint32, uint64 in two channels with
   blocks that do not divide the chunk, in shards) voxel for voxel; hostile infos, chunks,
   compressed_segmentation (offsets, bits, tables past the chunk)
@@ -462,7 +463,8 @@ if got is not None:
 
 # by URL
 if nginx_path():
-    nginx, port, _ = start_nginx(OUT, OUT, "n5_precomputed_cli")
+    alog = os.path.join(OUT, "pc_access.log")
+    nginx, port, _ = start_nginx(OUT, OUT, "n5_precomputed_cli", access_log=alog)
     try:
         got, _, _ = read_back(f"http://127.0.0.1:{port}/ct.precomputed", "--level", "1")
         check(same(got, levels[1]), "precomputed by URL: scale 1 voxel for voxel")
@@ -479,6 +481,16 @@ if nginx_path():
         if pu and psr:
             check(psnr(pu, psr) >= 99, f"sharded by URL: the render equals local's "
                   f"({psnr(pu, psr):.1f} dB)")
+        # a frame of level 1 alone (--lod 1) asks no byte of level 0's shards, and reads
+        # level 1's by ranges
+        keys = [sc["key"] for sc in json.load(open(os.path.join(psh, "info")))["scales"]]
+        open(alog, "w").close()
+        if render("pc_sharded_url_lod1", url, "--lod", "1"):
+            reqs = open(alog).read().splitlines()
+            fine = [r for r in reqs if f"/{keys[0]}/" in r]
+            coarse = [r for r in reqs if f"/{keys[1]}/" in r and '"bytes=' in r]
+            check(not fine and coarse, f"sharded by URL, --lod 1: {len(fine)} requests of level "
+                  f"0 (want none), {len(coarse)} ranges of level 1 ({len(reqs)} requests)")
         # Neuroglancer's addresses: precomputed://URL; gs://BUCKET/PATH (anonymously at the
         # bucket's HTTPS address; here nginx stands in through STORAGE_EMULATOR_HOST)
         p = volvis("info", url)
