@@ -187,17 +187,33 @@ try:
         "const s = document.querySelector('.jp-Notebook-ExecutionIndicator');"
         "return s && s.getAttribute('data-status') === 'idle';"), 90, "an idle kernel")
 
+    def started(i):
+        """Cell i's prompt shows it queued, running or run: [*] or [n]."""
+        cell = driver.find_elements(By.CSS_SELECTOR, ".jp-Notebook .jp-Cell")[i]
+        p = cell.find_elements(By.CSS_SELECTOR, ".jp-InputPrompt")
+        t = p[0].text if p else ""
+        return "*" in t or any(ch.isdigit() for ch in t)
+
     def run_cell(i):
-        """Clicks into cell i's editor and runs it with Shift+Enter."""
+        """Clicks into cell i's editor and runs it with Shift+Enter; again when its prompt
+        does not show it started within 20 s (on a loaded machine a Shift+Enter right after
+        the kernel turned idle once only moved the selection: CI, cell 0 left at [ ])."""
         def editor():
             cell = driver.find_elements(By.CSS_SELECTOR, ".jp-Notebook .jp-Cell")[i]
             return [e for e in cell.find_elements(By.CSS_SELECTOR, ".jp-InputArea-editor")
                     if e.is_displayed()]
-        e = wait_until(editor, 30, "cell %d's editor" % i)[0]
-        driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", e)
-        ActionChains(driver).move_to_element(e).click().perform()
-        ActionChains(driver).key_down(Keys.SHIFT).send_keys(Keys.ENTER).key_up(Keys.SHIFT) \
-            .perform()
+        for attempt in range(3):
+            e = wait_until(editor, 30, "cell %d's editor" % i)[0]
+            driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", e)
+            ActionChains(driver).move_to_element(e).click().perform()
+            ActionChains(driver).key_down(Keys.SHIFT).send_keys(Keys.ENTER).key_up(Keys.SHIFT) \
+                .perform()
+            try:
+                wait_until(lambda: started(i), 20, "cell %d to start" % i)
+                return
+            except TimeoutError:
+                print("cell %d did not start (attempt %d): Shift+Enter again" % (i, attempt + 1))
+        raise TimeoutError("cell %d never started" % i)
     run_cell(0)
 
     def sharp_seq():
