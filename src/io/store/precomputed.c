@@ -495,13 +495,6 @@ inflate_alloc(const unsigned char *src, size_t m, size_t cap, unsigned char **ou
     return VV_OK;
 }
 
-/* Pairs of numbers by their first. */
-static int
-cmp_pair(const void *x, const void *y) {
-    const uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    return a < b ? -1 : a > b;
-}
-
 /* Shard @p key's index (2^minishard_bits (start, end) pairs, @p raw) checked
  * into a new *ent: each ends at or after its start, below PC_MAX_OFFSET, no
  * two minishard indexes overlapping. */
@@ -527,7 +520,7 @@ parse_shard_index(const zr_array *a, const char *key, const unsigned char *raw,
             sorted[2 * ns++ + 1] = ent[2 * i + 1];
         }
     if (s == VV_OK)
-        qsort(sorted, (size_t)ns, 16, cmp_pair);
+        qsort(sorted, (size_t)ns, 16, zr_cmp_range);
     for (uint64_t i = 1; s == VV_OK && i < ns; i++)
         if (sorted[2 * i] < sorted[2 * i - 1])
             s = vv_error_set(VV_ERR_FORMAT,

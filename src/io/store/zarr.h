@@ -55,6 +55,14 @@ typedef struct zr_chain {
 
 struct zr_index_cache;
 
+/* qsort's order of (offset, length) pairs of 64-bit numbers by their first
+ * (shard index ranges, checked for overlaps). */
+static inline int
+zr_cmp_range(const void *x, const void *y) {
+    const uint64_t *a = x, *b = y;
+    return a[0] < b[0] ? -1 : a[0] > b[0];
+}
+
 /* The little-endian 64-bit number at @p p (shard indexes). */
 static inline uint64_t
 zr_le64(const unsigned char *p) {

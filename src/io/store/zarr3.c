@@ -667,12 +667,6 @@ zr3_untranspose(const zr_chain *c, int ndim, const uint64_t *shape, size_t es, u
 
 /* ---- sharded chunks ---- */
 
-static int
-cmp_range(const void *x, const void *y) {
-    const uint64_t *a = x, *b = y;
-    return a[0] < b[0] ? -1 : a[0] > b[0];
-}
-
 /* The bytes of a level-@p l shard index of @p count entries (with its
  * checksum) into *ib; *big = 1 when its numbers are big-endian. */
 static void
@@ -734,7 +728,7 @@ parse_index(const zr_array *a, int l, const char *key, const unsigned char *raw,
     if (s == VV_OK) {
         r[2 * nr] = ioff;
         r[2 * nr++ + 1] = ib;
-        qsort(r, (size_t)nr, 16, cmp_range);
+        qsort(r, (size_t)nr, 16, zr_cmp_range);
         for (uint64_t i = 1; i < nr && s == VV_OK; i++)
             if (r[2 * i - 2] + r[2 * i - 1] > r[2 * i])
                 s = vv_error_set(VV_ERR_FORMAT,
