@@ -50,8 +50,10 @@ cli_convert_usage(FILE *out) {
                  "by nearest, and each level's scale and translation; read back at any\n"
                  "level with --level) has none either; it is written chunk by chunk,\n"
                  "with memory bounded by a row of chunks (or shards), when IN is raw,\n"
-                 "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris), and\n"
-                 "by 64 slices when IN is a TIFF stack or a gzip or bzip2 NRRD (slab by slab);\n"
+                 "an uncompressed NRRD or a pyramid (OME-Zarr, N5, Neuroglancer precomputed,\n"
+                 "BigDataViewer, Imaris; a TIFF whose 66 slices take over 512 MiB: tile by\n"
+                 "tile), and by 64 slices when IN is another TIFF stack or a gzip or bzip2\n"
+                 "NRRD (slab by slab);\n"
                  "SLC (.slc; VolVis's own 8-bit format)\n"
                  "holds 8-bit data only: other voxel types are rescaled from the value\n"
                  "range to 0..255, with a note on stderr. What a format cannot hold is\n"
@@ -64,7 +66,8 @@ cli_convert_usage(FILE *out) {
                  "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
                  "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
                  "pread, so memory stays bounded by a brick; TIFF stacks and gzip/bzip2 NRRD a\n"
-                 "slab of 66 slices at a time (a layer of bricks); other formats are read whole\n"
+                 "slab of 66 slices at a time (a layer of bricks; a TIFF of larger slices tile\n"
+                 "by tile); other formats are read whole\n"
                  "first (a pyramid -- OME-Zarr, BigDataViewer, Imaris -- by boxes of its\n"
                  "level 0). Each brick is one zstd frame unless --no-compress, and gets a\n"
                  "coarse level (every 4th voxel) unless --no-coarse (zstd bricks always\n"
@@ -112,8 +115,9 @@ cli_convert_usage(FILE *out) {
             "                     hyperstacks, NIfTI (dim[4]), NRRD (an axis of kind time),\n"
             "                     DICOM (images repeating at each position: cine, 4-D CT)\n"
             "  --level L          resolution level L of a multiresolution IN (OME-Zarr\n"
-            "                     multiscales, BigDataViewer, Imaris; from 0, the\n"
-            "                     finest; default 0)\n"
+            "                     multiscales, N5, precomputed, BigDataViewer, Imaris,\n"
+            "                     an OME-TIFF's SubIFD levels, reduced in z too; from\n"
+            "                     0, the finest; default 0)\n"
             "  -q, --quiet        no 'wrote' line and no conversion note\n"
             "  -h, --help         show this help\n"
             "\n",
@@ -151,6 +155,16 @@ box_input_close(box_input *bi) {
     memset(bi, 0, sizeof *bi);
 }
 
+/* A slab of slices (vv_slabs: 64 slices and the 2 its bricks share) read
+ * at once at most; a stack of larger slices is read by its store. */
+#define CONVERT_SLAB_MAX ((uint64_t)512 << 20)
+
+/* The bytes of a slab of 66 slices of volume @p h. */
+static uint64_t
+slab_bytes(const vv_volume *h) {
+    return h ? (uint64_t)h->dims[0] * (uint64_t)h->dims[1] * 66u * vv_voxel_type_size(h->type) : 0;
+}
+
 /* Opens IN as a box reader when it can be one: 0 and bi->read set; -1 when
  * it reads whole only (the caller reads it so); else an exit code. */
 static int
@@ -169,6 +183,15 @@ open_boxes(const char *in, const vv_raw_params *raw, int channel, int time, box_
     }
     vv_error_clear();
     vv_status s = vv_open(&bi->od, in, &oo);
+    const vv_format_record *row = vv_format_record_of(bi->od.format);
+    if (s == VV_OK && bi->od.kind == VV_DATA_VOLUME && row &&
+        (row->flags & VV_FORMAT_FLAG_SLICES) && !raw &&
+        slab_bytes(vv_source_level(bi->od.source, 0)) <= CONVERT_SLAB_MAX) {
+        /* a stack whose slabs fit: slab by slab, each slice decoded once
+         * (its store, tile by tile, would decode a strip once a chunk) */
+        vv_opened_clear(&bi->od);
+        s = VV_ERR_UNSUPPORTED;
+    }
     if (s == VV_OK && bi->od.kind == VV_DATA_VOLUME) {
         bi->hdr = vv_source_level(bi->od.source, 0);
         bi->read = vv_source_box;

@@ -39,6 +39,23 @@ vv_opened_clear(vv_opened *o) {
     memset(o, 0, sizeof *o);
 }
 
+/* A folder of TIFF files: told by their first bytes alone (the TIFF row's
+ * deep test reads no more), so here rather than in the sandbox; what the
+ * sandbox's deep detection would say too, the TIFF row coming before
+ * DICOM's deep test. Its store then reads it out of core. */
+static int
+tiff_folder(const char *path) {
+    struct stat st;
+    const vv_format_record *t = vv_format_record_of(VV_FORMAT_TIFF);
+    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode) || !t || !t->looks_like)
+        return 0;
+    unsigned char buf[VV_FORMAT_PROBE_BYTES + 1];
+    char text[VV_FORMAT_PROBE_BYTES + 1];
+    vv_format_probe p;
+    vv_format_probe_fill(&p, path, buf, text);
+    return t->looks_like(&p, 1);
+}
+
 /* The row of @p path: the caller's @p f, else detected (signatures; the
  * deep tests of grids and meshes, which read names only, here; those of
  * volumes run where the volume is read); NULL when unknown. */
@@ -54,6 +71,8 @@ row_of(const char *path, vv_format f, int *deep_volume) {
         g = vv_format_detect_kind(path, VV_DATA_MESH, 1);
     if (g == VV_FORMAT_UNKNOWN)
         g = io_detect_registered(path, VV_DATA_VOLUME);
+    if (g == VV_FORMAT_UNKNOWN && tiff_folder(path))
+        g = VV_FORMAT_TIFF;
     if (g == VV_FORMAT_UNKNOWN)
         *deep_volume = 1; /* vv_volume_load's detection, in the sandbox when wanted */
     return vv_format_record_of(g);
@@ -115,8 +134,8 @@ store_record(const char *path, const vv_format_record **r) {
     *r = vv_format_record_of(vv_format_detect_kind(path, VV_DATA_VOLUME, 0));
     if (!*r || !(*r)->open_store)
         return vv_error_set(VV_ERR_FORMAT,
-                            "%s: not a multiresolution file (OME-Zarr, BigDataViewer or Imaris "
-                            "HDF5, a .vvb)",
+                            "%s: not a multiresolution file (OME-Zarr, N5, Neuroglancer "
+                            "precomputed, BigDataViewer or Imaris HDF5, TIFF, a .vvb)",
                             vv_path_basename(path));
     return VV_OK;
 }
@@ -153,6 +172,16 @@ bytes_of(const vv_volume *h) {
            vv_voxel_type_size(h->type);
 }
 
+/* 1 when @p path is a regular file of at most @p bytes: a stack (a TIFF)
+ * that small holds at most a few times as many voxel bytes, read whole
+ * sooner than its store is opened in the sandbox to tell its size. */
+static int
+file_under(const char *path, uint64_t bytes) {
+    struct stat st;
+    return !bs_is_url(path) && stat(path, &st) == 0 && S_ISREG(st.st_mode) &&
+           (uint64_t)st.st_size <= bytes;
+}
+
 /* @p path opened out of core as row @p r can: a pyramid (its store) when
  * the row has one and either the caller prefers levels or the row has no
  * bricks; else by bricks (the row's own, or its raw layout). VV_ERR_UNSUPPORTED
@@ -169,6 +198,11 @@ open_out_of_core(vv_opened *out, const vv_format_record *r, const char *path,
     if (nch > VV_MAX_CHANNELS)
         return vv_error_set(VV_ERR_LIMIT, "%s: %d channels at once (at most %d)",
                             vv_path_basename(path), nch, VV_MAX_CHANNELS);
+    /* a small stack, opened to be drawn whole if it fits or to tell its
+     * size (a header, no levels asked): whole, without opening its store */
+    if ((auto_small || (opt->header_only && !opt->levels)) && (r->flags & VV_FORMAT_FLAG_SLICES) &&
+        file_under(path, quarter / 8))
+        return VV_ERR_UNSUPPORTED;
     if (r->open_store && (opt->levels || !bricks || nch)) {
         vv_pyramid *p = NULL;
         vv_load_info *info = out->ch_info;

@@ -46,11 +46,12 @@
 #include "io/io_internal.h"
 #include "io/prescan.h"
 #include "io/volume/tiff_msg.h"
+#include "io/volume/tiff_stack.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
-static TIFF *
-tiff_open(const char *path, tiff_msg *msg) {
+TIFF *
+tiff_open_file(const char *path, tiff_msg *msg) {
     msg->text[0] = '\0';
     TIFFOpenOptions *o = TIFFOpenOptionsAlloc();
     if (!o)
@@ -59,7 +60,9 @@ tiff_open(const char *path, tiff_msg *msg) {
     TIFFOpenOptionsSetWarningHandlerExtR(o, tiff_on_warning, msg);
     /* no single allocation inside libtiff beyond our own volume limit */
     TIFFOpenOptionsSetMaxSingleMemAlloc(o, (tmsize_t)1 << 31);
-    TIFF *t = TIFFOpenExt(path, "r", o);
+    /* "m": read, not mapped: a mapped file counts whole in the resident set
+     * of a reader that reads a few tiles of it */
+    TIFF *t = TIFFOpenExt(path, "rm", o);
     TIFFOpenOptionsFree(o);
     return t;
 }
@@ -449,16 +452,8 @@ vv_tiff_prescan_description(const char *desc) {
 
 /* ---- pages ------------------------------------------------------------------ */
 
-/* What every page must agree on. */
-typedef struct page_fmt {
-    uint32_t w, h;
-    uint16_t bps, spp, fmt, planar;
-    uint16_t photometric; /* PHOTOMETRIC_RGB: samples 0..2 are red, green and blue */
-    vv_voxel_type type;
-} page_fmt;
-
-static vv_status
-page_format(TIFF *t, page_fmt *f) {
+vv_status
+tiff_page_format(TIFF *t, page_fmt *f) {
     uint32_t w = 0, h = 0;
     uint16_t bps = 1, spp = 1, fmt = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG;
     if (!TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &w) || !TIFFGetField(t, TIFFTAG_IMAGELENGTH, &h))
@@ -503,28 +498,36 @@ page_format(TIFF *t, page_fmt *f) {
     return VV_OK;
 }
 
-/* Copies rows [y0, y0+rows) x columns [x0, x0+cols) of a decoded chunk with
- * @p stride samples per row and @p ns samples per pixel (sample @p s) into
- * the slice @p dst. */
+/* @p n pixels of sample @p s of @p ns a pixel from @p src into @p dst. */
 static void
-copy_chunk(unsigned char *dst, const page_fmt *f, const unsigned char *src, uint32_t x0,
-           uint32_t y0, uint32_t cols, uint32_t rows, uint32_t src_w, int ns, int s) {
-    size_t vs = vv_voxel_type_size(f->type);
-    for (uint32_t r = 0; r < rows; r++) {
-        const unsigned char *sr = src + (size_t)r * src_w * (size_t)ns * vs;
-        unsigned char *dr = dst + ((size_t)(y0 + r) * f->w + x0) * vs;
-        if (ns == 1) {
-            memcpy(dr, sr, (size_t)cols * vs);
-        } else {
-            for (uint32_t c = 0; c < cols; c++)
-                memcpy(dr + c * vs, sr + ((size_t)c * (size_t)ns + (size_t)s) * vs, vs);
-        }
+copy_span(unsigned char *dst, const unsigned char *src, uint32_t n, int ns, int s, size_t vs) {
+    if (ns == 1) {
+        memcpy(dst, src, (size_t)n * vs);
+        return;
     }
+    for (uint32_t c = 0; c < n; c++)
+        memcpy(dst + c * vs, src + ((size_t)c * (size_t)ns + (size_t)s) * vs, vs);
 }
 
-/* Reads sample @p sample of the current page into @p dst (w*h voxels). */
-static vv_status
-read_page(TIFF *t, const page_fmt *f, int sample, unsigned char *dst, tiff_msg *msg) {
+/* The rows of decoded tile or strip @p src (its first pixel at @p cx, @p cy,
+ * @p cw pixels a row, @p ch rows) inside the box x0, y0, cols, rows, into
+ * @p dst (the box's voxels). */
+static void
+copy_overlap(unsigned char *dst, const unsigned char *src, uint32_t cx, uint32_t cy, uint32_t cw,
+             uint32_t ch, uint32_t x0, uint32_t y0, uint32_t cols, uint32_t rows, int ns, int s,
+             size_t vs) {
+    const uint32_t ax = cx > x0 ? cx : x0, ay = cy > y0 ? cy : y0;
+    const uint32_t bx = cx + cw < x0 + cols ? cx + cw : x0 + cols;
+    const uint32_t by = cy + ch < y0 + rows ? cy + ch : y0 + rows;
+    for (uint32_t y = ay; y < by; y++)
+        copy_span(dst + ((size_t)(y - y0) * cols + (ax - x0)) * vs,
+                  src + (((size_t)(y - cy) * cw + (ax - cx)) * (size_t)ns) * vs, bx - ax, ns, s,
+                  vs);
+}
+
+vv_status
+tiff_read_region(TIFF *t, const page_fmt *f, int sample, uint32_t x0, uint32_t y0, uint32_t cols,
+                 uint32_t rows, unsigned char *dst, tiff_msg *msg, uint64_t *bytes) {
     int planar = f->planar == PLANARCONFIG_SEPARATE && f->spp > 1;
     int ns = planar ? 1 : f->spp;
     uint16_t plane = planar ? (uint16_t)sample : 0;
@@ -544,8 +547,8 @@ read_page(TIFF *t, const page_fmt *f, int sample, unsigned char *dst, tiff_msg *
         unsigned char *buf = malloc((size_t)size);
         if (!buf)
             return vv_error_set(VV_ERR_NOMEM, "out of memory for a tile");
-        for (uint32_t y = 0; y < f->h; y += th)
-            for (uint32_t x = 0; x < f->w; x += tw) {
+        for (uint32_t y = y0 / th * th; y < y0 + rows; y += th)
+            for (uint32_t x = x0 / tw * tw; x < x0 + cols; x += tw) {
                 uint32_t tile = TIFFComputeTile(t, x, y, 0, plane);
                 msg->text[0] = '\0';
                 tmsize_t got = TIFFReadEncodedTile(t, tile, buf, size);
@@ -554,9 +557,9 @@ read_page(TIFF *t, const page_fmt *f, int sample, unsigned char *dst, tiff_msg *
                     return vv_error_set(VV_ERR_FORMAT, "tile %u: %s", tile,
                                         tiff_msg_or(msg, "cannot decode (truncated or corrupt)"));
                 }
-                uint32_t cols = x + tw > f->w ? f->w - x : tw;
-                uint32_t rows = y + th > f->h ? f->h - y : th;
-                copy_chunk(dst, f, buf, x, y, cols, rows, tw, ns, s);
+                if (bytes)
+                    *bytes += TIFFGetStrileByteCount(t, tile);
+                copy_overlap(dst, buf, x, y, tw, th, x0, y0, cols, rows, ns, s, vs);
             }
         free(buf);
         return VV_OK;
@@ -571,19 +574,21 @@ read_page(TIFF *t, const page_fmt *f, int sample, unsigned char *dst, tiff_msg *
     unsigned char *buf = malloc((size_t)size);
     if (!buf)
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a strip");
-    for (uint32_t y = 0; y < f->h; y += rps) {
-        uint32_t rows = y + rps > f->h ? f->h - y : rps;
+    for (uint32_t y = y0 / rps * rps; y < y0 + rows; y += rps) {
+        uint32_t n = y + rps > f->h ? f->h - y : rps;
         uint32_t strip = TIFFComputeStrip(t, y, plane);
         msg->text[0] = '\0';
         tmsize_t got = TIFFReadEncodedStrip(t, strip, buf, size);
-        tmsize_t need = (tmsize_t)rows * f->w * ns * (tmsize_t)vs;
+        tmsize_t need = (tmsize_t)n * f->w * ns * (tmsize_t)vs;
         if (got < need) {
             free(buf);
             return vv_error_set(VV_ERR_FORMAT, "strip %u: %s", strip,
                                 got < 0 ? tiff_msg_or(msg, "cannot decode (truncated or corrupt)")
                                         : "fewer bytes than the strip's rows need (truncated)");
         }
-        copy_chunk(dst, f, buf, 0, y, f->w, rows, f->w, ns, s);
+        if (bytes)
+            *bytes += TIFFGetStrileByteCount(t, strip);
+        copy_overlap(dst, buf, 0, y, f->w, n, x0, y0, cols, rows, ns, s, vs);
     }
     free(buf);
     return VV_OK;
@@ -615,29 +620,29 @@ count_pages(TIFF *t, long limit) {
     return n;
 }
 
-/* One page source: file index and page within it. */
-typedef struct page_ref {
-    int file;
-    long page;
-} page_ref;
-
 /* Which stack and slices read_stack reads: a channel and a time step (-1:
  * the first), slices z_first .. z_first + z_count - 1 (z_count 0: all). */
 typedef struct stack_pick {
     int channel, time, z_first, z_count;
 } stack_pick;
 
-static vv_status
-read_stack(vv_volume **out, char **files, int n_files, const stack_pick *pick, vv_load_info *info,
-           const char **bad_file) {
-    const int channel = pick->channel, time = pick->time;
+void
+tiff_stack_clear(tiff_stack *k) {
+    free(k->refs);
+    memset(k, 0, sizeof *k);
+}
+
+vv_status
+tiff_stack_plan(tiff_stack *k, char **files, int n_files, int channel, int time,
+                const char **bad_file) {
+    memset(k, 0, sizeof *k);
     tiff_msg msg;
     *bad_file = files[0];
-    TIFF *t = tiff_open(files[0], &msg);
+    TIFF *t = tiff_open_file(files[0], &msg);
     if (!t)
         return vv_error_set(VV_ERR_FORMAT, "%s", tiff_msg_or(&msg, "not a TIFF file"));
     page_fmt f0;
-    vv_status s = page_format(t, &f0);
+    vv_status s = tiff_page_format(t, &f0);
     if (s != VV_OK) {
         TIFFClose(t);
         return vv_error_prefix(s, "page 0");
@@ -698,47 +703,76 @@ read_stack(vv_volume **out, char **files, int n_files, const stack_pick *pick, v
     if (tp >= m.size_t_)
         return vv_error_set(VV_ERR_INVALID, "time step %d asked, the stack has %d time step%s", tp,
                             m.size_t_, m.size_t_ == 1 ? "" : "s");
+    k->refs = malloc((size_t)nz * sizeof *k->refs);
+    if (!k->refs)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int z = 0; z < nz; z++) {
+        if (n_files == 1) {
+            k->refs[z].file = 0;
+            k->refs[z].page = page_of(&m, z, m.size_c > 1 ? ch : 0, tp);
+        } else {
+            k->refs[z].file = z;
+            k->refs[z].page = 0;
+        }
+    }
+    k->f0 = f0;
+    k->nz = nz;
+    k->nc = nc;
+    k->nt = m.size_t_;
+    k->channel = ch;
+    k->time = tp;
+    k->sample = m.size_c <= 1 ? ch : 0; /* channels are the samples of each pixel */
+    for (int i = 0; i < 3; i++)
+        k->spacing[i] = m.spacing[i] > 0 ? m.spacing[i] : 1;
+    if (m.spacing[0] > 0 && !(m.spacing[1] > 0))
+        k->spacing[1] = m.spacing[0];
+    for (int i = 0; i < 3; i++)
+        k->origin[i] = m.has_origin[i]      ? m.origin[i]
+                       : m.has_ij_origin[i] ? -m.ij_origin[i] * k->spacing[i]
+                                            : 0;
+    k->unit = (m.is_ome || m.is_imagej) ? m.unit : VV_UNIT_UNKNOWN;
+    k->time_step = m.time_step;
+    k->meta = meta;
+    return VV_OK;
+}
+
+static vv_status
+read_stack(vv_volume **out, char **files, int n_files, const stack_pick *pick, vv_load_info *info,
+           const char **bad_file) {
+    tiff_stack k;
+    vv_status s = tiff_stack_plan(&k, files, n_files, pick->channel, pick->time, bad_file);
+    if (s != VV_OK)
+        return s;
+    const page_fmt f0 = k.f0;
+    const int nz = k.nz;
     /* the slices read: all, or the range asked */
     const int z0 = pick->z_count > 0 ? pick->z_first : 0;
     const int nread = pick->z_count > 0 ? pick->z_count : nz;
-    if (pick->z_count > 0 && (z0 > nz - nread || nread > nz))
-        return vv_error_set(VV_ERR_INVALID, "slices %d to %d asked, the stack has %d (from 0)", z0,
-                            z0 + nread - 1, nz);
     int dims[3] = {(int)f0.w, (int)f0.h, nread};
-    s = vv_volume_check_size(dims, f0.type, NULL);
-    if (s != VV_OK)
-        return s;
-    page_ref *refs = malloc((size_t)nz * sizeof *refs);
-    if (!refs)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    int sample = 0;
-    for (int z = 0; z < nz; z++) {
-        if (n_files == 1) {
-            refs[z].file = 0;
-            refs[z].page = page_of(&m, z, m.size_c > 1 ? ch : 0, tp);
-        } else {
-            refs[z].file = z;
-            refs[z].page = 0;
-        }
-    }
-    if (m.size_c <= 1)
-        sample = ch; /* channels are the samples of each pixel */
     vv_volume *v = NULL;
-    s = vv_volume_new(&v, dims, f0.type);
+    if (pick->z_count > 0 && (z0 > nz - nread || nread > nz))
+        s = vv_error_set(VV_ERR_INVALID, "slices %d to %d asked, the stack has %d (from 0)", z0,
+                         z0 + nread - 1, nz);
+    if (s == VV_OK)
+        s = vv_volume_check_size(dims, f0.type, NULL);
+    if (s == VV_OK)
+        s = vv_volume_new(&v, dims, f0.type);
     if (s != VV_OK) {
-        free(refs);
+        tiff_stack_clear(&k);
         return s;
     }
     size_t slice = (size_t)f0.w * f0.h * vv_voxel_type_size(f0.type);
     int open_file = -1;
-    t = NULL;
+    TIFF *t = NULL;
+    tiff_msg msg;
+    const page_ref *refs = k.refs;
     for (int z = z0; z < z0 + nread && s == VV_OK; z++) {
         if (refs[z].file != open_file) {
             if (t)
                 TIFFClose(t);
             open_file = refs[z].file;
             *bad_file = files[open_file];
-            t = tiff_open(files[open_file], &msg);
+            t = tiff_open_file(files[open_file], &msg);
             if (!t) {
                 s = vv_error_set(VV_ERR_FORMAT, "%s", tiff_msg_or(&msg, "not a TIFF file"));
                 break;
@@ -751,46 +785,72 @@ read_stack(vv_volume **out, char **files, int n_files, const stack_pick *pick, v
             break;
         }
         page_fmt f;
-        s = page_format(t, &f);
+        s = tiff_page_format(t, &f);
         if (s == VV_OK && (f.w != f0.w || f.h != f0.h || f.type != f0.type || f.spp != f0.spp))
             s = vv_error_set(VV_ERR_FORMAT,
                              "%u x %u %s x %u samples, the first page is %u x %u %s x %u", f.w, f.h,
                              vv_voxel_type_name(f.type), f.spp, f0.w, f0.h,
                              vv_voxel_type_name(f0.type), f0.spp);
         if (s == VV_OK)
-            s = read_page(t, &f, sample, (unsigned char *)v->data + (size_t)(z - z0) * slice, &msg);
+            s = tiff_read_region(t, &f, k.sample, 0, 0, f.w, f.h,
+                                 (unsigned char *)v->data + (size_t)(z - z0) * slice, &msg, NULL);
         if (s != VV_OK)
             s = vv_error_prefix(s, "page %ld", refs[z].page);
     }
     if (t)
         TIFFClose(t);
-    free(refs);
     if (s != VV_OK) {
+        tiff_stack_clear(&k);
         vv_volume_free(v);
         return s;
     }
-    for (int i = 0; i < 3; i++)
-        if (m.spacing[i] > 0)
-            v->spacing[i] = m.spacing[i];
-    if (m.spacing[0] > 0 && !(m.spacing[1] > 0))
-        v->spacing[1] = m.spacing[0];
-    for (int i = 0; i < 3; i++)
-        v->origin[i] = m.has_origin[i]      ? m.origin[i]
-                       : m.has_ij_origin[i] ? -m.ij_origin[i] * v->spacing[i]
-                                            : 0;
+    for (int i = 0; i < 3; i++) {
+        v->spacing[i] = k.spacing[i];
+        v->origin[i] = k.origin[i];
+    }
     v->origin[2] += z0 * v->spacing[2]; /* the first slice read (TIFF has no direction) */
-    v->unit = (m.is_ome || m.is_imagej) ? m.unit : VV_UNIT_UNKNOWN;
+    v->unit = k.unit;
     v->modification = VV_MOD_ORIGINAL;
     vv_volume_update_range(v);
     if (info) {
-        *info = meta;
-        info->n_channels = nc;
-        info->n_times = m.size_t_;
-        info->time_step = m.time_step;
+        *info = k.meta;
+        info->n_channels = k.nc;
+        info->n_times = k.nt;
+        info->time_step = k.time_step;
         info->n_slices = nz;
     }
+    tiff_stack_clear(&k);
     *out = v;
     return VV_OK;
+}
+
+vv_status
+tiff_files(const char *path, char ***files, int *n, int *is_dir) {
+    *files = NULL;
+    *n = 0;
+    *is_dir = 0;
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        int e = errno;
+        return vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(e));
+    }
+    if (S_ISDIR(st.st_mode)) {
+        *is_dir = 1;
+        return list_folder(path, files, n);
+    }
+    char **v = malloc(sizeof *v);
+    if (!v || !(v[0] = strdup(path))) {
+        free(v);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    *files = v;
+    *n = 1;
+    return VV_OK;
+}
+
+void
+tiff_free_files(char **files, int n) {
+    free_list(files, n);
 }
 
 static vv_status
@@ -798,31 +858,15 @@ tiff_read_at(vv_volume **out, const char *path, const stack_pick *pick, vv_load_
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "tiff: NULL argument");
     *out = NULL;
-    struct stat st;
-    if (stat(path, &st) != 0) {
-        int e = errno;
-        vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(e));
-        return vv_error_prefix(VV_ERR_IO, "tiff: %s", path);
-    }
     char **files = NULL;
-    int n = 0;
-    vv_status s;
-    if (S_ISDIR(st.st_mode)) {
-        s = list_folder(path, &files, &n);
-        if (s != VV_OK)
-            return vv_error_prefix(s, "tiff: %s", path);
-    } else {
-        files = malloc(sizeof *files);
-        if (!files || !(files[0] = strdup(path))) {
-            free(files);
-            return vv_error_set(VV_ERR_NOMEM, "tiff: %s: out of memory", path);
-        }
-        n = 1;
-    }
+    int n = 0, is_dir = 0;
+    vv_status s = tiff_files(path, &files, &n, &is_dir);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "tiff: %s", path);
     const char *bad = path;
     s = read_stack(out, files, n, pick, info, &bad);
     if (s != VV_OK)
-        s = vv_error_prefix(s, "tiff: %s", n > 1 || S_ISDIR(st.st_mode) ? bad : path);
+        s = vv_error_prefix(s, "tiff: %s", n > 1 || is_dir ? bad : path);
     free_list(files, n);
     return s;
 }
@@ -857,6 +901,13 @@ tiff_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 tiff_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    if (opt->level > 0) /* an OME-TIFF's SubIFD level (reduced in z too) */
+        return opt->z_count > 0
+                   ? vv_error_set(VV_ERR_UNSUPPORTED,
+                                  "tiff: %s: slices of a level past 0 (read the "
+                                  "level whole)",
+                                  vv_path_basename(path))
+                   : vv_tiff_read_level(out, path, opt->channel, opt->time, opt->level, opt->info);
     const stack_pick pick = {opt->channel, opt->time, opt->z_first, opt->z_count};
     return tiff_read_at(out, path, &pick, opt->info);
 }
@@ -889,10 +940,12 @@ const vv_format_record vv_format_tiff = {
     .aliases = tiff_aliases,
     .doc = "TIFF through libtiff: pages or a folder of pages, BigTIFF, OME-TIFF, ImageJ; written "
            "as one page per slice (OME-XML for .ome.tif, ImageJ's keys otherwise), deflate "
-           "unless --codec or --no-compress",
+           "unless --codec or --no-compress; read out of core tile by tile, OME-TIFF SubIFD "
+           "pyramids as levels of detail",
     .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_SLICES,
     .looks_like = tiff_looks_like,
     .fits = tiff_fits,
     .read = tiff_read_record,
     .write = tiff_write_record,
+    .open_store = vv_tiff_open_store,
 };
