@@ -311,9 +311,7 @@ vv_format_detect_kind(const char *path, int kind, int deep) {
         if (kind >= 0 && kind != VV_DATA_VOLUME)
             return VV_FORMAT_UNKNOWN;
         /* Neuroglancer's precomputed:// and n5:// name their rows */
-        const char *row = !strncasecmp(path, "precomputed://", 14) ? "precomputed"
-                          : !strncasecmp(path, "n5://", 5)         ? "n5"
-                                                                   : "zarr";
+        const char *row = bs_url_format(path) ? bs_url_format(path) : "zarr";
         for (int i = 0; i < N_BUILT_IN; i++)
             if (!strcmp(table[i]->name, row))
                 return (vv_format)(i + 1);

@@ -3,6 +3,7 @@
 tests): the checks and their summary, running volvis, reading back a NRRD VolVis wrote,
 and the sharded pyramid zarr-python 3 writes."""
 import gzip
+import os
 import subprocess
 import sys
 
@@ -33,6 +34,17 @@ class Checks:
 def run(volvis, *args):
     """volvis ARGS..., its output captured as text."""
     return subprocess.run([volvis, *args], capture_output=True, text=True)
+
+
+def render_png(volvis, out_dir, check, name, src, *args):
+    """volvis render SRC -o OUT_DIR/NAME.png ARGS...: the image's path, or None after a
+    failed check naming the exit status and stderr."""
+    out = os.path.join(out_dir, name + ".png")
+    p = run(volvis, "render", src, "-o", out, *args)
+    ok = p.returncode == 0 and os.path.exists(out)
+    if not ok:
+        check(False, f"render {name}: exit {p.returncode}: {p.stderr.strip()}")
+    return out if ok else None
 
 
 def read_nrrd(path):

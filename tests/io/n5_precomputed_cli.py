@@ -55,7 +55,7 @@ except ImportError as e:  # pragma: no cover
     sys.exit(77)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_common import Checks, read_nrrd, run  # noqa: E402
+from cli_common import Checks, read_nrrd, render_png, run  # noqa: E402
 from http_common import nginx_path, start_nginx, stop_server  # noqa: E402
 from pyramid_common import psnr  # noqa: E402
 
@@ -113,12 +113,7 @@ def same(got, want):
 
 
 def render(name, store, *args):
-    out = os.path.join(OUT, name + ".png")
-    p = volvis("render", store, "-o", out, *SIZE, *args)
-    ok = p.returncode == 0 and os.path.exists(out)
-    if not ok:
-        check(False, f"render {name}: exit {p.returncode}: {p.stderr.strip()}")
-    return out if ok else None
+    return render_png(VOLVIS, OUT, check, name, store, *SIZE, *args)
 
 
 rng = np.random.default_rng(91)

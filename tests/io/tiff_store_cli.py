@@ -37,7 +37,7 @@ except ImportError as e:
     sys.exit(77)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_common import Checks, read_nrrd, run  # noqa: E402
+from cli_common import Checks, read_nrrd, render_png, run  # noqa: E402
 from pyramid_common import psnr  # noqa: E402
 
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
@@ -53,12 +53,7 @@ def volvis(*args):
 
 
 def render(name, src, *args):
-    out = os.path.join(OUT, name + ".png")
-    p = volvis("render", src, "-o", out, *SIZE, *args)
-    ok = p.returncode == 0 and os.path.exists(out)
-    if not ok:
-        check(False, f"render {name}: exit {p.returncode}: {p.stderr.strip()}")
-    return out if ok else None
+    return render_png(VOLVIS, OUT, check, name, src, *SIZE, *args)
 
 
 def db(a, b):

@@ -133,6 +133,14 @@ bs_url_unprefix(const char *url) {
     return url;
 }
 
+const char *
+bs_url_format(const char *url) {
+    return !url                                      ? NULL
+           : !strncasecmp(url, "precomputed://", 14) ? "precomputed"
+           : !strncasecmp(url, "n5://", 5)           ? "n5"
+                                                     : NULL;
+}
+
 int
 bs_is_url(const char *path) {
     path = bs_url_unprefix(path);

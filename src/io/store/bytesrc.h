@@ -77,6 +77,9 @@ int bs_is_url(const char *path);
 /* @p url past Neuroglancer's data source prefixes (precomputed://,
  * n5://, zarr://, zarr2://, zarr3://): the URL itself. */
 const char *bs_url_unprefix(const char *url);
+/* The format row a Neuroglancer prefix of @p url names: "precomputed" or
+ * "n5"; NULL for none or a Zarr prefix (the Zarr row tells v2 from v3). */
+const char *bs_url_format(const char *url);
 
 /* The name of store @p path in messages: a URL whole, a local path's base name. */
 const char *bs_name(const char *path);

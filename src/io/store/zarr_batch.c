@@ -515,7 +515,7 @@ plan(zb_job *j, uint64_t n) {
         j->off[i] = 0;
         j->len[i] = ZR_ALL; /* an unsharded chunk: its whole object */
     }
-    if (a->nshard == 1 || pc_sharded(a)) {
+    if (sharded(a)) {
         const vv_status s = a->nshard == 1
                                 ? zr3_locate_many(a, n, j->idx, j->off, j->len, j->missing,
                                                   bs_http_in_flight(), NULL)

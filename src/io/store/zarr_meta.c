@@ -322,7 +322,7 @@ contents_get(const char *path, vv_ome_zarr_contents *out) {
     int array = 0;
     /* an N5 or precomputed store (by URL the Zarr row reads them too): one
      * image, its metadata the reader's */
-    if (!strncasecmp(path, "precomputed://", 14) || !strncasecmp(path, "n5://", 5)) {
+    if (bs_url_format(path)) {
         out->kind = VV_OME_ZARR_IMAGE;
         free(a);
         return VV_OK;

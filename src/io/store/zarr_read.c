@@ -513,8 +513,9 @@ root_metadata(const zr_array *a, json_t **za, const char **md) {
     *md = ".zattrs";
     /* Neuroglancer's precomputed:// and n5:// name the format: its
      * metadata alone is asked for */
-    const int pc_only = !strncasecmp(a->root, "precomputed://", 14);
-    const int n5_only = !strncasecmp(a->root, "n5://", 5);
+    const char *only = bs_url_format(a->root);
+    const int pc_only = only && !strcmp(only, "precomputed");
+    const int n5_only = only && !strcmp(only, "n5");
     json_t *z3 = pc_only || n5_only ? NULL : load_json(a, "zarr.json", "zarr.json", 1, &s);
     if (s != VV_OK)
         return s;
