@@ -18,6 +18,12 @@ driver writes, VolVis reads; numpy is the judge.
   spacing and the centre shift of a 2x2x2 mean; the same group described by
   pixelResolution and downsamplingFactors alone, and by a COSEM multiscales block,
   opens alike; rendered out of core (--memory-limit 8M) as in memory (>= 50 dB);
+- BigDataViewer's bdv.n5 (setup<S>/timepoint<T>/s<L>, datasets by tensorstore): `volvis
+  info` names its setups as channels and its timepoints as time steps; setups, timepoints
+  and levels voxel for voxel; a timepoint group without attributes by itself; both setups
+  out of core together as in memory; a dataset XML with ImageLoader bdv.n5: the setups'
+  names, the registration's spacing and origin; an XML naming a container outside its
+  folder and a setup the container lacks: one line;
 - served by nginx on loopback: the dataset and the group by URL equal to the local
   files (convert voxel for voxel, the out-of-core render pixel for pixel);
 - hostile datasets and groups (a block shorter than its header, object mode, a block
@@ -230,6 +236,107 @@ ooc = render("ct_ooc", g1, "--level", "0", "--memory-limit", "8M", "--tf", "100:
 if mem and ooc:
     d = psnr(mem, ooc)
     check(d >= 50, f"ct: out of core (--memory-limit 8M) {d:.1f} dB from in memory (>= 50)")
+
+# ---- BigDataViewer's bdv.n5: setups as channels, timepoints as time steps ------------------------
+# the layout BigDataViewer's N5 export writes (setup<S>/timepoint<T>/s<L>, the setup's
+# downsamplingFactors and dataType; a timepoint group with Paintera's multiScale and
+# resolution, or none at all), the datasets by tensorstore; two setups of the CT (the second
+# its negative), three timepoints (shifted by 100 each), levels of 2x2x2 means
+bdv = os.path.join(OUT, "bdv.n5")
+shutil.rmtree(bdv, ignore_errors=True)
+os.makedirs(bdv)
+with open(os.path.join(bdv, "attributes.json"), "w") as f:
+    json.dump({"n5": "4.0.0"}, f)
+small = ct[::2, ::2, ::2].astype(np.int32)  # 128 x 128 x 54, x first
+
+
+def bdv_volume(s, t):
+    return (small * (1 if s == 0 else -1) + 100 * t).astype(np.int16)
+
+
+for s in range(2):
+    sd = os.path.join(bdv, f"setup{s}")
+    os.makedirs(sd)
+    with open(os.path.join(sd, "attributes.json"), "w") as f:
+        json.dump({"downsamplingFactors": [[1, 1, 1], [2, 2, 2]], "dataType": "int16"}, f)
+    for t in range(3):
+        v = bdv_volume(s, t)
+        for i, lv in enumerate((v, mean2(v))):
+            n5_write(os.path.join(sd, f"timepoint{t}", f"s{i}"), lv, (32, 32, 16))
+        if t != 1:  # timepoint 1 keeps no attributes (they are optional)
+            with open(os.path.join(sd, f"timepoint{t}", "attributes.json"), "w") as f:
+                json.dump({"multiScale": True, "resolution": [1.0, 1.0, 1.0]}, f)
+p = volvis("info", bdv)
+txt = p.stdout
+check(p.returncode == 0 and "channels:     2" in txt and "time steps:   3" in txt
+      and "levels:       2" in txt and '"setup1"' in txt,
+      f"bdv.n5: info names 2 setups as channels, 3 time steps, 2 levels: {txt[:500]} "
+      f"{p.stderr.strip()}")
+for (c, t, lv) in ((0, 0, 0), (1, 2, 0), (1, 1, 1), (0, 2, 1)):
+    want = bdv_volume(c, t) if lv == 0 else mean2(bdv_volume(c, t))
+    got, _, _ = read_back(bdv, "--channel", str(c), "--time", str(t), "--level", str(lv))
+    check(same(got, want), f"bdv.n5: setup {c} at timepoint {t}, level {lv} voxel for voxel")
+got, _, _ = read_back(os.path.join(bdv, "setup1", "timepoint1"), "--level", "1")
+check(same(got, mean2(bdv_volume(1, 1))),
+      "bdv.n5: a timepoint group without attributes opened by itself, level 1")
+p = volvis("convert", bdv, os.path.join(OUT, "bdv_bad.nrrd"), "--channel", "2", "--quiet")
+check(p.returncode != 0 and len(p.stderr.strip().splitlines()) == 1 and "2 setups" in p.stderr
+      and not os.path.exists(os.path.join(OUT, "bdv_bad.nrrd")),
+      f"bdv.n5: a third setup asked: one line ({p.stderr.strip()})")
+bm = render("bdv_mem", bdv, "--channels", "0,1", "--time", "2")
+bo = render("bdv_ooc", bdv, "--channels", "0,1", "--time", "2", "--level", "0",
+            "--memory-limit", "4M")
+if bm and bo:
+    d = psnr(bm, bo)
+    check(d >= 50, f"bdv.n5: two setups at timepoint 2 out of core {d:.1f} dB from in memory")
+
+# the same container named by a dataset XML (ImageLoader bdv.n5): its setups' names, its
+# calibration as the spacing
+CAL = [0.4, 0.4, 1.2]
+views = "".join(f"""    <ViewRegistration timepoint="{t}" setup="{s}">
+      <ViewTransform type="affine"><affine>{CAL[0]} 0 0 5 0 {CAL[1]} 0 6 0 0 {CAL[2]} 7</affine>
+      </ViewTransform>
+    </ViewRegistration>
+""" for t in range(3) for s in range(2))
+setups = "".join(f"""      <ViewSetup><id>{s}</id><name>{n}</name><size>128 128 54</size>
+        <voxelSize><unit>µm</unit><size>{CAL[0]} {CAL[1]} {CAL[2]}</size></voxelSize>
+      </ViewSetup>
+""" for s, n in enumerate(("bone", "negative")))
+bdv_xml = os.path.join(OUT, "bdv_n5.xml")
+with open(bdv_xml, "w", encoding="utf-8") as f:
+    f.write(f"""<?xml version="1.0" encoding="UTF-8"?>
+<SpimData version="0.2">
+  <BasePath type="relative">.</BasePath>
+  <SequenceDescription>
+    <ImageLoader format="bdv.n5" version="1.0">
+      <n5 type="relative">bdv.n5</n5>
+    </ImageLoader>
+    <ViewSetups>
+{setups}    </ViewSetups>
+    <Timepoints type="range"><first>0</first><last>2</last></Timepoints>
+  </SequenceDescription>
+  <ViewRegistrations>
+{views}  </ViewRegistrations>
+</SpimData>
+""")
+p = volvis("info", bdv_xml)
+check(p.returncode == 0 and '"negative"' in p.stdout and "time steps:   3" in p.stdout,
+      f"bdv.n5 XML: info names the setups and 3 time steps: {p.stdout[:400]} {p.stderr.strip()}")
+with open(bdv_xml, encoding="utf-8") as f:
+    outside = f.read().replace('<n5 type="relative">bdv.n5', '<n5 type="relative">../bdv.n5')
+bad_xml = os.path.join(OUT, "bdv_n5_outside.xml")
+with open(bad_xml, "w", encoding="utf-8") as f:
+    f.write(outside)
+p = volvis("convert", bad_xml, os.path.join(OUT, "bdv_bad.nrrd"), "--quiet")
+check(p.returncode != 0 and len(p.stderr.strip().splitlines()) == 1
+      and "n5 container" in p.stderr and "bdv_n5_outside.xml" in p.stderr,
+      f"bdv.n5 XML: a container outside the XML's folder is refused ({p.stderr.strip()})")
+got, sp, org = read_back(bdv_xml, "--channel", "1", "--time", "2", "--level", "1")
+check(same(got, mean2(bdv_volume(1, 2))) and sp is not None
+      and np.allclose(sp, [2 * c for c in CAL], rtol=1e-4)
+      and np.allclose(org, [5 + CAL[0] / 2, 6 + CAL[1] / 2, 7 + CAL[2] / 2], rtol=1e-4),
+      f"bdv.n5 XML: setup 1 at timepoint 2, level 1 voxel for voxel, spacing {sp} and origin "
+      f"{org} from the registration")
 
 # ---- by URL: nginx on loopback -------------------------------------------------------------------
 if nginx_path():

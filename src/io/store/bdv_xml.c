@@ -13,7 +13,9 @@
  * A (f o (i, j, k) + (f - 1) / 2), its direction the unit columns of A
  * diag(f) and its spacing their lengths. The voxels are read through the
  * HDF5 pyramid's store (hdf5_pyramid.c), unsigned 16-bit stored as int16
- * read as BigDataViewer reads it (bit for bit).
+ * read as BigDataViewer reads it (bit for bit). An ImageLoader of format
+ * "bdv.n5" (<n5 type="relative">) names an N5 container instead, read
+ * through the N5 reader (n5.c: vv_n5_bdv_store, group setup<S>/timepoint<T>).
  *
  * The XML is parsed by libxml2, a third party's parser: the row runs in the
  * reader sandbox, which reads beneath the XML's folder only; the HDF5 file
@@ -40,7 +42,8 @@
 
 /* What the XML says of the dataset. */
 typedef struct bdv_doc {
-    char h5[4096]; /* the HDF5 file, resolved beside the XML */
+    char h5[4096]; /* the HDF5 file (or N5 container), resolved beside the XML */
+    int n5;        /* 1: ImageLoader format bdv.n5 (h5 names the container) */
     int n_setups, n_times;
     int setup_id[BDV_MAX_SETUPS];
     char setup_name[BDV_MAX_SETUPS][VV_CHANNEL_NAME_MAX];
@@ -201,31 +204,34 @@ static vv_status
 resolve_h5(bdv_doc *d, xmlNode *loader, const char *path, const char *xml) {
     xmlChar *fmt = loader ? xmlGetProp(loader, (const xmlChar *)"format") : NULL;
     const int hdf5 = fmt && !strcmp((const char *)fmt, "bdv.hdf5");
+    d->n5 = fmt && !strcmp((const char *)fmt, "bdv.n5");
     vv_status s = VV_OK;
-    if (!hdf5)
+    if (!hdf5 && !d->n5)
         s = vv_error_set(VV_ERR_UNSUPPORTED,
-                         "%s: ImageLoader format \"%s\" (VolVis reads bdv.hdf5 datasets)", xml,
-                         fmt ? (const char *)fmt : "");
+                         "%s: ImageLoader format \"%s\" (VolVis reads bdv.hdf5 and bdv.n5 "
+                         "datasets)",
+                         xml, fmt ? (const char *)fmt : "");
     xmlFree(fmt);
     if (s != VV_OK)
         return s;
-    xmlNode *h = child(loader, "hdf5");
+    const char *tag = d->n5 ? "n5" : "hdf5", *what = d->n5 ? "n5 container" : "hdf5 file";
+    xmlNode *h = child(loader, tag);
     char name[4096];
     xmlChar *type = h ? xmlGetProp(h, (const xmlChar *)"type") : NULL;
     const int absolute = type && !strcmp((const char *)type, "absolute");
     xmlFree(type);
-    if (!h || !child_text(loader, "hdf5", name, sizeof name) || !name[0])
-        return vv_error_set(VV_ERR_FORMAT, "%s: the ImageLoader names no hdf5 file", xml);
+    if (!h || !child_text(loader, tag, name, sizeof name) || !name[0])
+        return vv_error_set(VV_ERR_FORMAT, "%s: the ImageLoader names no %s", xml, what);
     if (absolute || name[0] == '/' || !strcmp(name, "..") || !strncmp(name, "../", 3) ||
         strstr(name, "/../") || (strlen(name) >= 3 && !strcmp(name + strlen(name) - 3, "/..")))
         return vv_error_set(VV_ERR_FORMAT,
-                            "%s: the hdf5 file \"%s\" is not a relative path inside the XML's "
+                            "%s: the %s \"%s\" is not a relative path inside the XML's "
                             "folder (the only place read)",
-                            xml, name);
+                            xml, what, name);
     const char *slash = strrchr(path, '/');
     const size_t dir = slash ? (size_t)(slash - path) + 1 : 0, len = strlen(name);
     if (dir + len + 1 > sizeof d->h5)
-        return vv_error_set(VV_ERR_LIMIT, "%s: the hdf5 file's path is too long", xml);
+        return vv_error_set(VV_ERR_LIMIT, "%s: the %s's path is too long", xml, what);
     memcpy(d->h5, path, dir);
     memcpy(d->h5 + dir, name, len + 1);
     /* a symbolic link (the file's or a folder's on its way) may still lead
@@ -243,9 +249,9 @@ resolve_h5(bdv_doc *d, xmlNode *loader, const char *path, const char *xml) {
     free(rfile);
     if (!inside)
         return vv_error_set(VV_ERR_FORMAT,
-                            "%s: the hdf5 file \"%s\" resolves outside the XML's folder (a "
+                            "%s: the %s \"%s\" resolves outside the XML's folder (a "
                             "link)",
-                            xml, name);
+                            xml, what, name);
     return VV_OK;
 }
 
@@ -483,7 +489,8 @@ bdv_open_store(vv_store *st, const char *path, int channel, int time, vv_load_in
     if (s == VV_OK)
         s = view_affine(d, d->timepoint[t], d->setup_id[c], A, xml);
     if (s == VV_OK) {
-        s = vv_h5_bdv_store(st, d->h5, d->setup_id[c], d->timepoint[t]);
+        s = d->n5 ? vv_n5_bdv_store(st, d->h5, d->setup_id[c], d->timepoint[t])
+                  : vv_h5_bdv_store(st, d->h5, d->setup_id[c], d->timepoint[t]);
         if (s != VV_OK)
             s = vv_error_prefix(s, "bdv: %s: %s", xml, vv_path_basename(d->h5));
     }

@@ -42,8 +42,10 @@
 #include <blosc.h>
 
 #include "core/internal.h"
+#include "io/store/bytesrc.h"
 #include "io/store/pyramid.h"
 #include "io/store/zarr.h"
+#include "volvis/sys/source.h"
 
 /* the most levels a multiscale group is looked through for (s0 .. s31) */
 #define N5_MAX_LEVELS 32
@@ -541,8 +543,12 @@ vv_n5_looks_like(const vv_format_probe *p, int deep) {
         if (stat(f, &st) == 0)
             return 0;
     }
-    if (!zr_file_head(p->path, "attributes.json", head, sizeof head))
-        return 0;
+    if (!zr_file_head(p->path, "attributes.json", head, sizeof head)) {
+        /* a multiscale group need not have attributes (BigDataViewer's
+         * timepoint groups): its dataset s0 says */
+        snprintf(f, sizeof f, "%s/s0/attributes.json", p->path);
+        return stat(f, &st) == 0;
+    }
     if (strstr(head, "\"dimensions\"") || strstr(head, "\"dataType\"") ||
         strstr(head, "\"blockSize\""))
         return 1; /* a dataset (its reader names what it lacks) */
@@ -551,6 +557,167 @@ vv_n5_looks_like(const vv_format_probe *p, int deep) {
         return 1; /* a container or a multiscale group */
     snprintf(f, sizeof f, "%s/s0/attributes.json", p->path);
     return stat(f, &st) == 0;
+}
+
+/* ---- BigDataViewer's bdv.n5: setups as channels, timepoints as time steps ------------ */
+
+/* The most setups and timepoints a bdv.n5 container is looked through for. */
+#define BDV_N5_MAX 4096
+
+/* 1 when folder @p dir/@p fmt exists (fmt takes @p i, then @p j if it names two). */
+static int
+bdv_dir(const char *dir, const char *fmt, int i, int j) {
+    char f[4200];
+    int n = snprintf(f, sizeof f, "%s/", dir);
+    snprintf(f + n, sizeof f - (size_t)n, fmt, i, j);
+    struct stat st;
+    return stat(f, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/*
+ * 1 when local folder @p path is a BigDataViewer N5 container (its
+ * "BigDataViewer N5 format": groups setup<S>/timepoint<T> each a multiscale
+ * group s0 .. sN, the setup's attributes holding downsamplingFactors and
+ * dataType): *n_setups the setups setup0, setup1, ... and *n_times the
+ * timepoints of setup0 (timepoint0, timepoint1, ...), counted while they
+ * follow on.
+ */
+static int
+bdv_n5_layout(const char *path, int *n_setups, int *n_times) {
+    if (bs_is_url(path) || !bdv_dir(path, "setup%d/timepoint%d/s0", 0, 0))
+        return 0;
+    int ns = 1, nt = 1;
+    while (ns < BDV_N5_MAX && bdv_dir(path, "setup%d", ns, 0))
+        ns++;
+    while (nt < BDV_N5_MAX && bdv_dir(path, "setup0/timepoint%d", nt, 0))
+        nt++;
+    *n_setups = ns;
+    *n_times = nt;
+    return 1;
+}
+
+/* The group of setup @p setup at timepoint @p time of container @p path
+ * into @p out; VV_ERR_INVALID naming what the container has. */
+static vv_status
+bdv_n5_group(const char *path, int setup, int time, int ns, int nt, char *out, size_t cap) {
+    setup = setup < 0 ? 0 : setup;
+    time = time < 0 ? 0 : time;
+    if (setup >= ns)
+        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the container has %d setup%s", setup,
+                            ns, ns == 1 ? "" : "s");
+    if (time >= nt)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the container has %d timepoint%s",
+                            time, nt, nt == 1 ? "" : "s");
+    if (!bdv_dir(path, "setup%d/timepoint%d", setup, time))
+        return vv_error_set(VV_ERR_FORMAT, "no group setup%d/timepoint%d", setup, time);
+    if ((size_t)snprintf(out, cap, "%s/setup%d/timepoint%d", path, setup, time) >= cap)
+        return vv_error_set(VV_ERR_LIMIT, "path too long");
+    return VV_OK;
+}
+
+/* @p info's counts and name for a bdv.n5 setup. */
+static void
+bdv_n5_info(vv_load_info *info, int setup, int ns, int nt) {
+    if (!info)
+        return;
+    info->n_channels = ns;
+    info->n_times = nt;
+    if (!info->channel_name[0])
+        snprintf(info->channel_name, sizeof info->channel_name, "setup%d", setup < 0 ? 0 : setup);
+}
+
+static vv_status
+n5_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    int ns, nt;
+    if (!bdv_n5_layout(path, &ns, &nt))
+        return vv_n5_read(out, path, opt);
+    char group[4200];
+    vv_status s = bdv_n5_group(path, opt->channel, opt->time, ns, nt, group, sizeof group);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "n5: %s", vv_path_basename(path));
+    vv_load_options one = *opt;
+    one.channel = 0;
+    one.time = 0;
+    if ((s = vv_n5_read(out, group, &one)) == VV_OK)
+        bdv_n5_info(opt->info, opt->channel, ns, nt);
+    return s;
+}
+
+static vv_status
+n5_open_store(vv_store *st, const char *path, int channel, int time, vv_load_info *info) {
+    int ns, nt;
+    if (!bdv_n5_layout(path, &ns, &nt))
+        return vv_zr_pyramid_store(st, path, channel, time, info);
+    memset(st, 0, sizeof *st);
+    char group[4200];
+    vv_status s = bdv_n5_group(path, channel, time, ns, nt, group, sizeof group);
+    if (s == VV_OK)
+        s = vv_zr_pyramid_store(st, group, 0, 0, info);
+    if (s != VV_OK)
+        return s;
+    st->n_channels = ns;
+    st->n_times = nt;
+    bdv_n5_info(info, channel, ns, nt);
+    return VV_OK;
+}
+
+static vv_status
+n5_open_store_channels(vv_store *st, const char *path, int n, const int *channels, int time,
+                       vv_load_info *info) {
+    int ns, nt;
+    if (!bdv_n5_layout(path, &ns, &nt))
+        return vv_zr_pyramid_store_channels(st, path, n, channels, time, info);
+    if (n < 1 || n > VV_STORE_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_INVALID, "%d channels asked (1 .. %d)", n,
+                            VV_STORE_MAX_CHANNELS);
+    /* each setup its own store, stacked (as BigDataViewer's HDF5 setups) */
+    vv_store parts[VV_STORE_MAX_CHANNELS];
+    memset(parts, 0, sizeof parts);
+    vv_status s = VV_OK;
+    int k = 0;
+    for (; k < n && s == VV_OK; k++) {
+        vv_load_info one;
+        memset(&one, 0, sizeof one);
+        s = n5_open_store(&parts[k], path, channels[k], time, info ? &info[k] : &one);
+        if (s != VV_OK)
+            s = vv_error_prefix(s, "setup%d", channels[k]);
+    }
+    if (s == VV_OK)
+        return vv_store_stack(st, parts, n);
+    for (int i = 0; i < k; i++)
+        vv_store_close(&parts[i]);
+    return s;
+}
+
+vv_status
+vv_n5_bdv_store(vv_store *st, const char *path, int setup, int timepoint) {
+    memset(st, 0, sizeof *st);
+    char group[4200];
+    if (!bdv_dir(path, "setup%d/timepoint%d", setup, timepoint))
+        return vv_error_set(VV_ERR_FORMAT, "no group setup%d/timepoint%d", setup, timepoint);
+    if ((size_t)snprintf(group, sizeof group, "%s/setup%d/timepoint%d", path, setup, timepoint) >=
+        sizeof group)
+        return vv_error_set(VV_ERR_LIMIT, "path too long");
+    vv_status s = vv_zr_pyramid_store(st, group, 0, 0, NULL);
+    if (s != VV_OK)
+        return s;
+    /* in level 0's voxels: its spacing and origin divided out */
+    double sp0[3], o0[3];
+    for (int k = 0; k < 3; k++) {
+        sp0[k] = st->lv[0].hdr->spacing[k] > 0 ? st->lv[0].hdr->spacing[k] : 1;
+        o0[k] = st->lv[0].hdr->origin[k];
+    }
+    for (int l = 0; l < st->n_levels; l++) {
+        vv_volume *h = st->lv[l].hdr;
+        for (int k = 0; k < 3; k++) {
+            h->origin[k] = (h->origin[k] - o0[k]) / sp0[k];
+            h->spacing[k] /= sp0[k];
+        }
+        for (int k = 0; k < 9; k++)
+            h->direction[k] = k % 4 == 0;
+        h->unit = VV_UNIT_UNKNOWN;
+    }
+    return VV_OK;
 }
 
 static const char *const n5_extensions[] = {"n5", NULL};
@@ -565,10 +732,11 @@ const vv_format_record vv_format_n5 = {
            "blosc, zstd; default and varlength blocks) or a multiscale group of datasets s0 .. sN "
            "(downsamplingFactors or scales, resolution or pixelResolution, axes, units; COSEM "
            "multiscales), read like OME-Zarr: one level, channel and time step whole, or out of "
-           "core by level of detail",
+           "core by level of detail; a BigDataViewer N5 container (setupS/timepointT groups) "
+           "its setups as channels and its timepoints as time steps",
     .flags = VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_THIRD_PARTY,
     .looks_like = vv_n5_looks_like,
-    .read = vv_n5_read,
-    .open_store = vv_zr_pyramid_store,
-    .open_store_channels = vv_zr_pyramid_store_channels,
+    .read = n5_read_record,
+    .open_store = n5_open_store,
+    .open_store_channels = n5_open_store_channels,
 };

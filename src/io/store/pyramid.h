@@ -275,6 +275,16 @@ vv_status vv_vvb_pyramid_store(vv_store *st, const char *path, int channel, int 
 vv_status vv_h5_bdv_store(vv_store *st, const char *path, int setup, int timepoint);
 
 /**
+ * The store of BigDataViewer N5 container @p path's setup @p setup at
+ * timepoint @p timepoint (ids as a dataset XML names them: the group
+ * setup<S>/timepoint<T>, a multiscale group s0 .. sN), level geometry as
+ * vv_h5_bdv_store gives it (the group's own resolution divided out), for the
+ * XML to place. Errors: as vv_zr_pyramid_store, VV_ERR_FORMAT (no such
+ * group).
+ */
+vv_status vv_n5_bdv_store(vv_store *st, const char *path, int setup, int timepoint);
+
+/**
  * Every chunk of level @p level of @p st read into a new volume (the
  * level's geometry, its range computed): what a format row with a store
  * reads whole. Errors: VV_ERR_INVALID (no such level), VV_ERR_NOMEM,

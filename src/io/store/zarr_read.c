@@ -527,10 +527,10 @@ root_metadata(const zr_array *a, json_t **za, const char **md) {
         json_t *n5 = pc_only ? NULL : load_json(a, "attributes.json", "attributes.json", 1, &s);
         if (s != VV_OK)
             return s;
-        if (!n5) { /* Neuroglancer precomputed: its info (precomputed.c) */
-            json_t *info = load_json(a, "info", "info", 1, &s);
-            if (s != VV_OK || !info)
-                return s;
+        json_t *info = n5 || n5_only ? NULL : load_json(a, "info", "info", 1, &s);
+        if (s != VV_OK)
+            return s;
+        if (info) { /* Neuroglancer precomputed: its info (precomputed.c) */
             *md = "info";
             void *ms = NULL;
             s = zr_pc_root(a, info, &ms);
@@ -538,6 +538,17 @@ root_metadata(const zr_array *a, json_t **za, const char **md) {
             json_decref(info);
             return s;
         }
+        if (!n5 && !pc_only) {
+            /* an N5 multiscale group without attributes (BigDataViewer's
+             * timepoint groups): its dataset s0 says */
+            json_t *s0 = load_json(a, "s0/attributes.json", "s0/attributes.json", 1, &s);
+            if (s != VV_OK || !s0)
+                return s;
+            json_decref(s0);
+            n5 = json_object();
+        }
+        if (!n5)
+            return s;
         *md = "attributes.json";
         void *ms = NULL;
         s = zr_n5_root(a, n5, &ms);

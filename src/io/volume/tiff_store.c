@@ -488,34 +488,12 @@ vv_tiff_read_level(vv_volume **out, const char *path, int channel, int time, int
     *out = NULL;
     vv_store st;
     vv_status r = vv_tiff_open_store(&st, path, channel, time, info);
-    if (r != VV_OK)
-        return vv_error_prefix(r, "tiff: %s", path);
-    vv_volume *v = NULL;
-    if (level >= st.n_levels)
+    if (r == VV_OK && level >= st.n_levels)
         r = vv_error_set(VV_ERR_INVALID, "level %d asked, the file has %d", level, st.n_levels);
-    const vv_volume *h = r == VV_OK ? st.lv[level].hdr : NULL;
-    if (r == VV_OK && (r = vv_volume_check_size(h->dims, h->type, NULL)) == VV_OK)
-        r = vv_volume_new(&v, h->dims, h->type);
-    if (r == VV_OK) {
-        const int zero[3] = {0, 0, 0};
-        int missing = 0;
-        uint64_t bytes = 0;
-        r = ts_read_chunk(st.ctx, level, zero, NULL, v->data, zero, h->dims, &missing, &bytes);
-    }
-    if (r == VV_OK) {
-        memcpy(v->spacing, h->spacing, sizeof v->spacing);
-        memcpy(v->origin, h->origin, sizeof v->origin);
-        v->unit = h->unit;
-        v->modification = VV_MOD_ORIGINAL;
-        vv_volume_update_range(v);
-        if (info)
-            info->n_levels = st.n_levels;
-    }
+    if (r == VV_OK) /* chunk by chunk: slices of one chunk's depth held at once */
+        r = vv_store_read_level(&st, level, out);
+    if (r == VV_OK && info)
+        info->n_levels = st.n_levels;
     vv_store_close(&st);
-    if (r != VV_OK) {
-        vv_volume_free(v);
-        return vv_error_prefix(r, "tiff: %s", path);
-    }
-    *out = v;
-    return VV_OK;
+    return r == VV_OK ? VV_OK : vv_error_prefix(r, "tiff: %s", path);
 }
