@@ -223,28 +223,38 @@ refused("mixed", mixed, "z09.tif")
 # ---- 300 MB under 64M ------------------------------------------------------------------------
 
 
+def descendants(pid):
+    """PID and every process below it (from /proc/PID/task/*/children)."""
+    found, todo = [], [pid]
+    while todo:
+        q = todo.pop()
+        found.append(q)
+        try:
+            for t in os.listdir(f"/proc/{q}/task"):
+                with open(f"/proc/{q}/task/{t}/children") as f:
+                    todo.extend(int(c) for c in f.read().split())
+        except (OSError, ValueError):
+            pass  # a process that ended meanwhile
+    return found
+
+
+def status_kb(path, key):
+    """The kB of line KEY in /proc's file PATH (0 when the process is gone)."""
+    try:
+        with open(path) as f:
+            for ln in f:
+                if ln.startswith(key):
+                    return int(ln.split()[1])
+    except (OSError, ValueError):
+        pass
+    return 0
+
+
 def tree_pss(pid):
     """The proportional set size (kB) of PID and its descendants together (shared
     libraries counted once), and PID's own peak resident set (VmHWM, kB)."""
-    total, hwm, todo = 0, 0, [pid]
-    while todo:
-        q = todo.pop()
-        try:
-            with open(f"/proc/{q}/smaps_rollup") as f:
-                for ln in f:
-                    if ln.startswith("Pss:"):
-                        total += int(ln.split()[1])
-            if q == pid:
-                with open(f"/proc/{q}/status") as f:
-                    for ln in f:
-                        if ln.startswith("VmHWM:"):
-                            hwm = int(ln.split()[1])
-            for t in os.listdir(f"/proc/{q}/task"):
-                with open(f"/proc/{q}/task/{t}/children") as f:
-                    todo += [int(c) for c in f.read().split()]
-        except (OSError, ValueError):
-            pass
-    return total, hwm
+    pss = sum(status_kb(f"/proc/{q}/smaps_rollup", "Pss:") for q in descendants(pid))
+    return pss, status_kb(f"/proc/{pid}/status", "VmHWM:")
 
 
 def peak_run(*args):

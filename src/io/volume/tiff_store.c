@@ -99,6 +99,15 @@ ts_close(void *ctx) {
     free(s);
 }
 
+/* Handle @p h back to @p s's free ones. */
+static void
+ts_give(ts_store *s, ts_handle *h) {
+    pthread_mutex_lock(&s->lock);
+    h->busy = 0;
+    pthread_cond_signal(&s->freed);
+    pthread_mutex_unlock(&s->lock);
+}
+
 /* A handle of @p s with file @p file open (waiting for one while all are
  * busy); NULL when the file does not open (the error set). */
 static ts_handle *
@@ -133,19 +142,8 @@ ts_take(ts_store *s, int file) {
     vv_error_set(VV_ERR_FORMAT, "%s%s", ts_where(s, file, w, sizeof w),
                  tiff_msg_or(&h->msg, "not a TIFF file"));
     h->file = -1;
-    pthread_mutex_lock(&s->lock);
-    h->busy = 0;
-    pthread_cond_signal(&s->freed);
-    pthread_mutex_unlock(&s->lock);
+    ts_give(s, h);
     return NULL;
-}
-
-static void
-ts_give(ts_store *s, ts_handle *h) {
-    pthread_mutex_lock(&s->lock);
-    h->busy = 0;
-    pthread_cond_signal(&s->freed);
-    pthread_mutex_unlock(&s->lock);
 }
 
 /* Box x0, y0, cols x rows of slice @p z (level 0's numbering) of level
@@ -193,26 +191,19 @@ ts_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsi
     uint64_t bytes = 0;
     vv_status st = VV_OK;
     *missing = 0;
-    if (L->zf == 1) {
-        for (int z = 0; z < dims[2] && st == VV_OK; z++)
-            st = ts_read_slice(s, level, org[2] + z, (uint32_t)org[0], (uint32_t)org[1],
-                               (uint32_t)dims[0], (uint32_t)dims[1], dst + (size_t)z * plane,
-                               &bytes);
-        *file_bytes = bytes;
-        return st;
-    }
-    /* z reduced here: the slices under the chunk, then their means */
+    /* the slices under the chunk: its own (zf 1, read into dst), or zf a
+     * voxel, reduced here to their means */
     const int z0 = org[2] * L->zf;
     int z1 = (org[2] + dims[2]) * L->zf;
     if (z1 > s->k.nz)
         z1 = s->k.nz;
-    unsigned char *src = malloc((size_t)(z1 - z0) * plane);
+    unsigned char *src = L->zf == 1 ? dst : malloc((size_t)(z1 - z0) * plane);
     if (!src)
         return vv_error_set(VV_ERR_NOMEM, "out of memory for level %d's slices", level);
     for (int z = z0; z < z1 && st == VV_OK; z++)
         st = ts_read_slice(s, level, z, (uint32_t)org[0], (uint32_t)org[1], (uint32_t)dims[0],
                            (uint32_t)dims[1], src + (size_t)(z - z0) * plane, &bytes);
-    if (st == VV_OK) {
+    if (st == VV_OK && src != dst) {
         const vv_pyr_reduce_box b = {.src = src,
                                      .type = L->f.type,
                                      .src_dims = {L->dims[0], L->dims[1], s->k.nz},
@@ -224,7 +215,8 @@ ts_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsi
                                      .dst_dims = {dims[0], dims[1]}};
         vv_pyr_reduce(&b, dst);
     }
-    free(src);
+    if (src != dst)
+        free(src);
     *file_bytes = bytes;
     return st;
 }
