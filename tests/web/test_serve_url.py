@@ -47,6 +47,7 @@ class Quiet(http.server.SimpleHTTPRequestHandler):
     go = threading.Event()
     lock = threading.Lock()
     active = 0  # requests being answered now
+    held = 0  # requests waiting under hold now
     last = 0.0  # time.monotonic() when the last answer ended
 
     def log_message(self, fmt, *args):
@@ -56,8 +57,12 @@ class Quiet(http.server.SimpleHTTPRequestHandler):
         with Quiet.lock:
             Quiet.active += 1
         try:
-            if Quiet.hold and self.path.startswith(Quiet.hold):
+            if Quiet.hold and self.path.startswith(Quiet.hold) and not Quiet.go.is_set():
+                with Quiet.lock:
+                    Quiet.held += 1
                 Quiet.go.wait()
+                with Quiet.lock:
+                    Quiet.held -= 1
             super().do_GET()
         finally:
             with Quiet.lock:
@@ -168,13 +173,29 @@ def browser_pending(root, store, www, prefix):
         Quiet.hold = "/data/b/slow.ome.zarr/0/c/"
         d.execute_script("window.volvis.send({type: 'open', url: arguments[0]})",
                          prefix + "b/slow.ome.zarr")
-        deadline = time.time() + WAIT
-        while time.time() < deadline and not Quiet.active:
+        # a read of level 0 held, and the page shows it pending (the server sent a
+        # `remote` with pending > 0): only then does the page fall behind. (Waiting for
+        # the line matters on a loaded machine: the server answers the listings below on
+        # its service thread, and while it does, it sends no `remote`; had it sent none
+        # before, the reads could all end unseen, and the page would rightly show none.)
+        # (as many pending as are held at least: not a line left from the metadata's reads)
+        deadline, text, shows = time.time() + WAIT, "", -1
+        while time.time() < deadline:
+            hidden, text, shows = d.execute_script(
+                "const e = document.getElementById('status-remote'), v = window.volvis;"
+                "return [e.hidden, e.textContent, v.remote ? v.remote.pending : -1];")
+            held = Quiet.held
+            if held and shows >= held and not hidden and re.match(PENDING, text):
+                break
             time.sleep(0.05)
-        held = Quiet.active
-        print(f"the copy opened; {held} reads of its level 0 held")
+        held = Quiet.held
+        print(f"the copy opened; {held} reads of its level 0 held, the page shows {text!r}")
         assert held > 0, "no read of level 0 held: the page cannot fall behind a pending read"
+        assert re.match(PENDING, text), ("the page never showed the held reads pending", text)
+        # (the file list is hidden meanwhile: laying out 4000 long names for each of the
+        # LISTS listings takes the page about a second each, which is not what is tested)
         d.execute_script(
+            "document.getElementById('files').style.display = 'none';"
             "for (let i = 0; i < arguments[0]; i++) window.volvis.send({type: 'list', "
             "path: 'many'});"
             "window.volvis.send({type: 'list', path: ''});"  # the last reply: the top
@@ -214,11 +235,13 @@ def browser_pending(root, store, www, prefix):
         # while the store opened or a frame waited (polling every 20 ms catches the
         # second only on a quiet machine, so it is not required)
         assert any(re.match(PENDING, t) for t in seen + list(shown)), (seen, shown)
-        assert top, "the page never read the replies it asked for"
+        assert top, ("the page never read the replies it asked for", hidden, text, pending,
+                     shown[-3:])
         assert hidden and pending == 0, ("the pending line stays (stale)", text, pending,
                                          shown[-3:])
         assert sharp, "no sharp frame"
         if os.environ.get("VV_TEST_OUT"):
+            d.execute_script("document.getElementById('files').style.display = '';")
             d.save_screenshot(os.path.join(os.environ["VV_TEST_OUT"], "serve_url_done.png"))
     finally:
         Quiet.drip, Quiet.hold = 0.0, None
