@@ -41,15 +41,25 @@ typedef enum vv_voxel_type {
     VV_F64
 } vv_voxel_type;
 
-/** Length unit of the spacing (SLC's enumeration; VV_UNIT_UNKNOWN otherwise). */
+/**
+ * Length unit of the spacing: SLC's enumeration (0 .. 5), then nanometres,
+ * which SLC cannot name (electron microscopy: Neuroglancer precomputed's
+ * resolution, OME-Zarr's "nanometer"). The values are stored in .vvb and
+ * .vvc headers; SLC and NIfTI, which hold no nanometres, are written in
+ * microns.
+ */
 typedef enum vv_unit {
     VV_UNIT_METER = 0,
     VV_UNIT_MM = 1,
     VV_UNIT_MICRON = 2,
     VV_UNIT_FOOT = 3,
     VV_UNIT_INCH = 4,
-    VV_UNIT_UNKNOWN = 5
+    VV_UNIT_UNKNOWN = 5,
+    VV_UNIT_NM = 6 /**< nanometres (not in SLC's enumeration) */
 } vv_unit;
+
+/** The largest vv_unit value: header checks accept 0 .. VV_UNIT_LAST. */
+#define VV_UNIT_LAST VV_UNIT_NM
 
 /** Where the data came from (SLC's "data origin" enumeration). */
 typedef enum vv_data_origin {
@@ -108,7 +118,7 @@ typedef struct vv_volume {
 } vv_volume;
 
 /**
- * Short name of a length unit: "m", "mm", "um", "ft", "in"; "unknown" for
+ * Short name of a length unit: "m", "mm", "um", "ft", "in", "nm"; "unknown" for
  * VV_UNIT_UNKNOWN and out-of-range values. Never NULL.
  */
 const char *vv_unit_name(vv_unit u);
@@ -123,8 +133,9 @@ const char *vv_volume_length_unit(const vv_volume *v);
 /**
  * Parses a unit name: the short names of vv_unit_name and the usual long
  * forms ("millimeter(s)", "micron(s)", "micrometer(s)", "µm" with the micro
- * sign or the Greek mu, "inch(es)", "foot", "feet", "meter(s)"). Anything
- * else gives VV_UNIT_UNKNOWN.
+ * sign or the Greek mu, "nanometer(s)", "inch(es)", "foot", "feet",
+ * "meter(s)"; also the British "-metre" spellings). Anything else gives
+ * VV_UNIT_UNKNOWN.
  */
 vv_unit vv_unit_parse(const char *name);
 

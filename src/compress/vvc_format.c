@@ -368,7 +368,7 @@ vvc_parse_header(vv_vvc *c, vvc_sections *sec) {
             return vv_error_set(VV_ERR_FORMAT, "dimension %d is %u", i, d);
         in->dims[i] = (int)d;
     }
-    if (b[28] > VV_F64 || b[29] > VV_UNIT_UNKNOWN || b[30] > VV_ORIGIN_OTHER ||
+    if (b[28] > VV_F64 || b[29] > VV_UNIT_LAST || b[30] > VV_ORIGIN_OTHER ||
         b[31] > VV_MOD_OTHER || b[32] > VV_SPACE_LPS)
         return vv_error_set(VV_ERR_FORMAT, "bad enumeration in the header");
     in->type = (vv_voxel_type)b[28];

@@ -31,8 +31,8 @@ vv_voxel_type_size(vv_voxel_type t) {
 
 const char *
 vv_unit_name(vv_unit u) {
-    static const char *const names[] = {"m", "mm", "um", "ft", "in"};
-    return (unsigned)u < 5 ? names[u] : "unknown";
+    static const char *const names[] = {"m", "mm", "um", "ft", "in", "unknown", "nm"};
+    return (unsigned)u <= VV_UNIT_LAST ? names[u] : "unknown";
 }
 
 const char *
@@ -54,16 +54,27 @@ vv_unit_parse(const char *u) {
     } alias[] = {{"m", VV_UNIT_METER},
                  {"meter", VV_UNIT_METER},
                  {"meters", VV_UNIT_METER},
+                 {"metre", VV_UNIT_METER},
+                 {"metres", VV_UNIT_METER},
                  {"mm", VV_UNIT_MM},
                  {"millimeter", VV_UNIT_MM},
                  {"millimeters", VV_UNIT_MM},
+                 {"millimetre", VV_UNIT_MM},
+                 {"millimetres", VV_UNIT_MM},
                  {"um", VV_UNIT_MICRON},
                  {"micron", VV_UNIT_MICRON},
                  {"microns", VV_UNIT_MICRON},
                  {"micrometer", VV_UNIT_MICRON},
                  {"micrometers", VV_UNIT_MICRON},
+                 {"micrometre", VV_UNIT_MICRON},
+                 {"micrometres", VV_UNIT_MICRON},
                  {"\xc2\xb5m", VV_UNIT_MICRON}, /* micro sign */
                  {"\xce\xbcm", VV_UNIT_MICRON}, /* Greek mu (BigDataViewer, Fiji) */
+                 {"nm", VV_UNIT_NM},
+                 {"nanometer", VV_UNIT_NM},
+                 {"nanometers", VV_UNIT_NM},
+                 {"nanometre", VV_UNIT_NM},
+                 {"nanometres", VV_UNIT_NM},
                  {"ft", VV_UNIT_FOOT},
                  {"foot", VV_UNIT_FOOT},
                  {"feet", VV_UNIT_FOOT},

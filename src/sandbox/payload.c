@@ -312,7 +312,7 @@ take_geometry(vv_volume *v, const sbx_reply *r) {
     memcpy(v->spacing, r->spacing, sizeof v->spacing);
     memcpy(v->origin, r->origin, sizeof v->origin);
     memcpy(v->direction, r->direction, sizeof v->direction);
-    v->unit = r->unit >= 0 && r->unit <= VV_UNIT_UNKNOWN ? (vv_unit)r->unit : VV_UNIT_UNKNOWN;
+    v->unit = r->unit >= 0 && r->unit <= VV_UNIT_LAST ? (vv_unit)r->unit : VV_UNIT_UNKNOWN;
     v->data_origin = r->data_origin >= 0 && r->data_origin <= VV_ORIGIN_OTHER
                          ? (vv_data_origin)r->data_origin
                          : VV_ORIGIN_OTHER;

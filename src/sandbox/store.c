@@ -172,7 +172,7 @@ head_ok(const sbx_store_head *h) {
     for (int l = 0; l < h->n_levels; l++) {
         const sbx_level *L = &h->lv[l];
         if (L->type < VV_U8 || L->type > VV_F64 || L->type != h->lv[0].type || L->unit < 0 ||
-            L->unit > VV_UNIT_UNKNOWN)
+            L->unit > VV_UNIT_LAST)
             return 0;
         for (int k = 0; k < 3; k++)
             if (L->dims[k] < 1 || L->dims[k] > VV_VOLUME_MAX_DIM || L->cdims[k] < 1 ||

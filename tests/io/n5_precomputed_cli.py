@@ -462,6 +462,8 @@ pc_write(pc, levels[1][..., None], (PCR[0] * 2, PCR[1] * 2, PCR[2] * 2), (64, 64
 p = volvis("info", pc)
 check(p.returncode == 0 and "format:       precomputed" in p.stdout and "levels:       2" in p.stdout,
       f"precomputed: info names the format and 2 levels: {p.stdout[:300]} {p.stderr.strip()}")
+check("unit:         nm" in p.stdout and "spacing:      957 x 957 x 1500 nm" in p.stdout,
+      f"precomputed: the resolution's unit is nm: {p.stdout[:400]}")
 for lv, sc in ((0, 1), (1, 2)):
     got, sp, org = read_back(pc, "--level", str(lv))
     r = [v * sc for v in PCR]

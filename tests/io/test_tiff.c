@@ -308,6 +308,45 @@ test_ome(void **state) {
     assert_non_null(strstr(vv_error_message(), "2 channels"));
 }
 
+/* OME's units per axis: z in nm under x's default µm (the spacing in µm), and
+ * x in nm (the volume in nm). */
+static void
+test_ome_units(void **state) {
+    (void)state;
+    static const char *const units[2] = {"PhysicalSizeZUnit=\"nm\"",
+                                         "PhysicalSizeXUnit=\"nm\" PhysicalSizeYUnit=\"nm\" "
+                                         "PhysicalSizeZUnit=\"µm\""};
+    static const double want[2][3] = {{0.5, 0.25, 0.5}, {0.5, 0.25, 500}};
+    for (int u = 0; u < 2; u++) {
+        char desc[1024];
+        snprintf(desc, sizeof desc,
+                 "<?xml version=\"1.0\" encoding=\"UTF-8\"?>"
+                 "<OME xmlns=\"http://www.openmicroscopy.org/Schemas/OME/2016-06\">"
+                 "<Image ID=\"Image:0\"><Pixels ID=\"Pixels:0\" DimensionOrder=\"XYCZT\" "
+                 "Type=\"uint16\" SizeX=\"12\" SizeY=\"10\" SizeZ=\"4\" SizeC=\"2\" "
+                 "SizeT=\"1\" PhysicalSizeX=\"0.5\" PhysicalSizeY=\"0.25\" "
+                 "PhysicalSizeZ=\"%s\" %s><TiffData/></Pixels></Image></OME>",
+                 u ? "0.5" : "500", units[u]);
+        wopt o = {.w = 12,
+                  .h = 10,
+                  .pages = 8,
+                  .spp = 1,
+                  .type = VV_U16,
+                  .compression = COMPRESSION_NONE,
+                  .rows_per_strip = 10,
+                  .description = desc,
+                  .page_cz = ome_page};
+        const char *p = out_path(u ? "units_nm.ome.tif" : "units_z_nm.ome.tif");
+        write_tiff(p, &o);
+        vv_volume *v = NULL;
+        vt_ok(vv_tiff_read(&v, p, 0));
+        for (int a = 0; a < 3; a++)
+            assert_near(v->spacing[a], want[u][a], 1e-9 * want[u][a]);
+        assert_int_equal(v->unit, u ? VV_UNIT_NM : VV_UNIT_MICRON);
+        vv_volume_free(v);
+    }
+}
+
 static void
 test_imagej(void **state) {
     (void)state;
@@ -651,6 +690,7 @@ main(void) {
         cmocka_unit_test(test_bigtiff),
         cmocka_unit_test(test_ome),
         cmocka_unit_test(test_imagej),
+        cmocka_unit_test(test_ome_units),
         cmocka_unit_test(test_folder_natural_order),
         cmocka_unit_test(test_nrrd_twin),
         cmocka_unit_test(test_strips_past_end),

@@ -4,7 +4,8 @@
  * and zlib), .tif and .ome.tif (every codec, BigTIFF), geometry carried (an oblique direction; LPS
  * into NIfTI's RAS and RAS into MetaImage's LPS, x and y negated), and the failures: a full disk
  * (RLIMIT_FSIZE), an unwritable folder, a float label volume, a .hdr name;
- * each a one-line error naming the file, with no file left behind. The
+ * each a one-line error naming the file, with no file left behind; and
+ * nanometres through every writer (kept, or converted to microns). The
  * independent readers (nibabel, VTK) are in tests/writers.
  */
 #include "testutil.h"
@@ -362,6 +363,53 @@ test_label_intent(void **state) {
  * not a Zarr store is refused and left as it was, an old store is replaced
  * (no file of it left), and a full disk leaves nothing (no temporary). The
  * voxels are read back by zarr-python in writers_independent.py. */
+/* Nanometres (electron microscopy: Neuroglancer precomputed, OME-Zarr's
+ * "nanometer"): the unit's names, and every writer's file read back. NRRD,
+ * TIFF (ImageJ and OME), OME-Zarr and .vvb keep nm; SLC and NIfTI, which
+ * name no nanometres, hold microns, the spacing and origin divided by 1000. */
+static void
+test_nanometres(void **state) {
+    (void)state;
+    assert_int_equal(vv_unit_parse("nm"), VV_UNIT_NM);
+    assert_int_equal(vv_unit_parse("nanometer"), VV_UNIT_NM);
+    assert_int_equal(vv_unit_parse("nanometres"), VV_UNIT_NM);
+    assert_int_equal(vv_unit_parse("micrometre"), VV_UNIT_MICRON);
+    assert_int_equal(vv_unit_parse("nanoseconds"), VV_UNIT_UNKNOWN);
+    assert_string_equal(vv_unit_name(VV_UNIT_NM), "nm");
+    assert_string_equal(vv_unit_name((vv_unit)(VV_UNIT_LAST + 1)), "unknown");
+    static const struct {
+        const char *name;
+        vv_unit unit;
+        double scale; /* the file's spacing over the volume's */
+    } cases[] = {{"nm.nrrd", VV_UNIT_NM, 1},         {"nm.tif", VV_UNIT_NM, 1},
+                 {"nm.ome.tif", VV_UNIT_NM, 1},      {"nm.ome.zarr", VV_UNIT_NM, 1},
+                 {"nm.vvb", VV_UNIT_NM, 1},          {"nm.slc", VV_UNIT_MICRON, 1e-3},
+                 {"nm.nii.gz", VV_UNIT_MICRON, 1e-3}};
+    const char *dir = vt_outdir("io_writers");
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        vv_volume *v = make_volume(VV_U8, 12, 10, 6, VV_SPACE_UNKNOWN), *back = NULL;
+        for (int i = 0; i < 9; i++)
+            v->direction[i] = i % 4 == 0;
+        const double sp[3] = {4, 4, 40}, org[3] = {800, 1200, 4000};
+        for (int a = 0; a < 3; a++) {
+            v->spacing[a] = sp[a];
+            v->origin[a] = org[a];
+        }
+        v->unit = VV_UNIT_NM;
+        const char *path = vt_path(dir, cases[c].name);
+        vt_ok(vv_volume_save(v, path, VV_FORMAT_AUTO, 0));
+        vt_ok(vv_volume_load(&back, path, NULL));
+        print_message("# %s: unit %s, spacing %g %g %g\n", cases[c].name, vv_unit_name(back->unit),
+                      back->spacing[0], back->spacing[1], back->spacing[2]);
+        assert_int_equal(back->unit, cases[c].unit);
+        for (int a = 0; a < 3; a++)
+            assert_near(back->spacing[a], sp[a] * cases[c].scale, 1e-6 * sp[a] * cases[c].scale);
+        assert_memory_equal(back->data, v->data, (size_t)vv_volume_voxel_count(v));
+        vv_volume_free(back);
+        vv_volume_free(v);
+    }
+}
+
 static void
 test_zarr_store(void **state) {
     (void)state;
@@ -441,7 +489,7 @@ main(void) {
         cmocka_unit_test(test_nifti2_long_axis), cmocka_unit_test(test_full_disk),
         cmocka_unit_test(test_errors),           cmocka_unit_test(test_label_intent),
         cmocka_unit_test(test_tiff_types),       cmocka_unit_test(test_parallel_deflate),
-        cmocka_unit_test(test_zarr_store),
+        cmocka_unit_test(test_zarr_store),       cmocka_unit_test(test_nanometres),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

@@ -650,7 +650,7 @@ h5p_geometry(const h5p_level *L, vv_volume *v) {
         v->spacing[k] = L->spacing[k];
         v->origin[k] = L->origin[k];
     }
-    v->unit = L->unit > 0 && L->unit <= VV_UNIT_UNKNOWN ? (vv_unit)L->unit : VV_UNIT_UNKNOWN;
+    v->unit = L->unit > 0 && L->unit <= VV_UNIT_LAST ? (vv_unit)L->unit : VV_UNIT_UNKNOWN;
     v->modification = VV_MOD_ORIGINAL;
 }
 

@@ -426,7 +426,7 @@ vvb_open_file(vvb_file *f) {
     /* optional metadata: a unit or space this build does not know is unknown,
      * not a value past the enumeration passed on to writers */
     const uint32_t unit = vvb_get_u32(h + 36), space = vvb_get_u32(h + 40);
-    v->unit = unit <= VV_UNIT_UNKNOWN ? (vv_unit)unit : VV_UNIT_UNKNOWN;
+    v->unit = unit <= VV_UNIT_LAST ? (vv_unit)unit : VV_UNIT_UNKNOWN;
     v->space = space <= VV_SPACE_LPS ? (vv_space)space : VV_SPACE_UNKNOWN;
     for (int a = 0; a < 3; a++) {
         v->spacing[a] = vvb_get_f64(h + 48 + 8 * a);

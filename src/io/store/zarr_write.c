@@ -330,6 +330,8 @@ ngff_unit(vv_unit u) {
         return "foot";
     case VV_UNIT_INCH:
         return "inch";
+    case VV_UNIT_NM:
+        return "nanometer";
     default:
         return NULL;
     }

@@ -610,19 +610,26 @@ nifti_datatype_of(vv_voxel_type t) {
     return (int)t >= 0 && (int)t < 8 ? map[t] : DT_UNKNOWN;
 }
 
-/* Millimetres per unit of the units NIfTI cannot name (feet, inches), else 0. */
-static double
-foreign_unit_mm(vv_unit u) {
-    return u == VV_UNIT_FOOT ? 304.8 : u == VV_UNIT_INCH ? 25.4 : 0;
+/* The unit a spacing in @p u is written in, *scale its factor: feet and inches,
+ * which NIfTI cannot name, in millimetres; nanometres in microns; the rest as
+ * they are (1). */
+static vv_unit
+written_unit(vv_unit u, double *scale) {
+    *scale = u == VV_UNIT_FOOT ? 304.8 : u == VV_UNIT_INCH ? 25.4 : u == VV_UNIT_NM ? 1e-3 : 1;
+    return u == VV_UNIT_FOOT || u == VV_UNIT_INCH ? VV_UNIT_MM
+           : u == VV_UNIT_NM                      ? VV_UNIT_MICRON
+                                                  : u;
 }
 
 static int
 nifti_fits(const vv_volume *v, char *why, size_t cap) {
-    if (foreign_unit_mm(v->unit) > 0) {
+    double scale;
+    const vv_unit w = written_unit(v->unit, &scale);
+    if (w != v->unit) {
         snprintf(why, cap,
                  "NIfTI holds metres, millimetres or microns, the spacing is in %s "
-                 "(written in millimetres)",
-                 vv_unit_name(v->unit));
+                 "(written in %s)",
+                 vv_unit_name(v->unit), w == VV_UNIT_MM ? "millimetres" : "microns");
         return 0;
     }
     return 1;
@@ -655,7 +662,8 @@ make_header(const vv_volume *v, const vv_save_options *opt, int version, unsigne
     nifti_image *nim = nifti_make_new_nim(dims, nifti_datatype_of(v->type), 0);
     if (!nim)
         return vv_error_set(VV_ERR_NOMEM, "nifti_clib cannot make the header");
-    double mm = foreign_unit_mm(v->unit), scale = mm > 0 ? mm : 1;
+    double scale;
+    const vv_unit unit = written_unit(v->unit, &scale);
     /* LPS to RAS: x and y change sign */
     double flip[3] = {1, 1, 1};
     if (v->space == VV_SPACE_LPS)
@@ -685,7 +693,7 @@ make_header(const vv_volume *v, const vv_save_options *opt, int version, unsigne
         nim->qto_xyz = m;
     }
     nim->pixdim[0] = nim->qfac;
-    switch (mm > 0 ? VV_UNIT_MM : v->unit) {
+    switch (unit) {
     case VV_UNIT_METER:
         nim->xyz_units = NIFTI_UNITS_METER;
         break;

@@ -396,10 +396,14 @@ slc_make_icon(const vv_volume *v, int *w_out, int *h_out, unsigned char **icon_o
 
 static vv_status
 slc_write_stream(const vv_volume *v, FILE *fp, int rle) {
-    /* Values outside SLC's enumerations (an unknown unit) are written as the
-       nearest honest value: millimetres, "other". */
+    /* Values outside SLC's enumerations are written as the nearest honest
+       value: nanometres in microns (the spacing scaled), an unknown unit as
+       millimetres, "other". */
     int unit = (int)v->unit, origin = (int)v->data_origin, mod = (int)v->modification;
-    if (unit < 0 || unit > 4)
+    const double sp = unit == VV_UNIT_NM ? 1e-3 : 1;
+    if (unit == VV_UNIT_NM)
+        unit = VV_UNIT_MICRON;
+    else if (unit < 0 || unit > 4)
         unit = VV_UNIT_MM;
     if (origin < 0 || origin > 7)
         origin = VV_ORIGIN_OTHER;
@@ -411,8 +415,8 @@ slc_write_stream(const vv_volume *v, FILE *fp, int rle) {
     if (s != VV_OK)
         return s;
     fprintf(fp, "%d\n%d %d %d 8\n%.17g %.17g %.17g\n%d %d %d %d\n%d %d X", SLC_MAGIC, v->dims[0],
-            v->dims[1], v->dims[2], v->spacing[0], v->spacing[1], v->spacing[2], unit, origin, mod,
-            rle ? 1 : 0, iw, ih);
+            v->dims[1], v->dims[2], sp * v->spacing[0], sp * v->spacing[1], sp * v->spacing[2],
+            unit, origin, mod, rle ? 1 : 0, iw, ih);
     fwrite(icon, 1, 3 * (size_t)iw * (size_t)ih, fp);
     free(icon);
 
@@ -488,11 +492,16 @@ slc_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
 
 static int
 slc_fits(const vv_volume *v, char *why, size_t cap) {
-    if (v->type == VV_U8)
-        return 1;
-    snprintf(why, cap, "SLC holds 8-bit voxels only, the volume is %s",
-             vv_voxel_type_name(v->type));
-    return 0;
+    if (v->type != VV_U8) {
+        snprintf(why, cap, "SLC holds 8-bit voxels only, the volume is %s",
+                 vv_voxel_type_name(v->type));
+        return 0;
+    }
+    if (v->unit == VV_UNIT_NM) {
+        snprintf(why, cap, "SLC holds no nanometres (the spacing is written in microns)");
+        return 0;
+    }
+    return 1;
 }
 
 /* A u8 copy of @p v rescaled linearly from range[] to 0..255. */

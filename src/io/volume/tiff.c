@@ -226,7 +226,16 @@ ome_unit(const char *u) {
         return VV_UNIT_INCH;
     if (!strcmp(u, "ft"))
         return VV_UNIT_FOOT;
+    if (!strcmp(u, "nm"))
+        return VV_UNIT_NM;
     return VV_UNIT_UNKNOWN;
+}
+
+/* Metres in one @p u; 0 when unknown. */
+static double
+unit_metres(vv_unit u) {
+    static const double m[] = {1, 1e-3, 1e-6, 0.3048, 0.0254, 0, 1e-9};
+    return (unsigned)u <= VV_UNIT_LAST ? m[u] : 0;
 }
 
 static void
@@ -258,14 +267,22 @@ parse_ome(const char *desc, stack_meta *m) {
     static const char *const phys[3] = {"PhysicalSizeX", "PhysicalSizeY", "PhysicalSizeZ"};
     static const char *const units[3] = {"PhysicalSizeXUnit", "PhysicalSizeYUnit",
                                          "PhysicalSizeZUnit"};
+    if (xml_attr(px, units[0], v, sizeof v))
+        m->unit = ome_unit(v);
     for (int i = 0; i < 3; i++) {
-        if (xml_attr(px, phys[i], v, sizeof v)) {
-            double d = strtod(v, NULL);
-            if (d > 0 && isfinite(d))
-                m->spacing[i] = d;
-        }
-        if (i == 0 && xml_attr(px, units[i], v, sizeof v))
-            m->unit = ome_unit(v);
+        if (!xml_attr(px, phys[i], v, sizeof v))
+            continue;
+        double d = strtod(v, NULL);
+        /* an axis in another unit than x's (z in nm, x in the default µm):
+         * its spacing in x's unit */
+        char u[16];
+        const double to = unit_metres(m->unit), from = i > 0 && xml_attr(px, units[i], u, sizeof u)
+                                                           ? unit_metres(ome_unit(u))
+                                                           : to;
+        if (to > 0 && from > 0)
+            d *= from / to;
+        if (d > 0 && isfinite(d))
+            m->spacing[i] = d;
     }
     /* the origin: the first Plane's position, when given in the pixels' unit */
     const char *pl = strstr(px, "<Plane ");

@@ -154,6 +154,8 @@ ome_unit_name(vv_unit u) {
         return "ft";
     case VV_UNIT_INCH:
         return "in";
+    case VV_UNIT_NM:
+        return "nm";
     default:
         return "pixel";
     }
