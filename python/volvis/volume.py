@@ -152,7 +152,7 @@ class Volume:
     spacing: world units between voxel centres along i, j, k (> 0); origin:
     world position of voxel (0, 0, 0); direction: 3x3 matrix whose columns
     are the unit directions of i, j, k (identity by default); unit: "mm",
-    "um", "m", "in", "ft" or None.
+    "um", "nm", "m", "in", "ft" or None.
 
     Thread-safety: reading and rendering from several threads is safe;
     changing the geometry while another thread renders is not.
