@@ -504,6 +504,7 @@ do_open(srv_session *s, const char *path, uint64_t client) {
     s->gen++;
     reply_json(s, 0, state_json(s));
     pthread_mutex_unlock(&s->lock);
+    srv_wake(s->srv); /* the state goes out now, not with the first frame's wake */
     vv_image_free(s->full);
     s->full = NULL;
     vv_preview_policy_init(&s->policy);
