@@ -272,6 +272,22 @@ ome_page(int p, int *z, int *c) {
     *z = p / 2;
 }
 
+/* A 12 x 10 u16 OME-TIFF of 8 pages (2 channels, 4 slices: ome_page), LZW,
+ * with @p desc as its ImageDescription. */
+static void
+write_ome_stack(const char *path, const char *desc) {
+    wopt o = {.w = 12,
+              .h = 10,
+              .pages = 8,
+              .spp = 1,
+              .type = VV_U16,
+              .compression = COMPRESSION_LZW,
+              .rows_per_strip = 10,
+              .description = desc,
+              .page_cz = ome_page};
+    write_tiff(path, &o);
+}
+
 static void
 test_ome(void **state) {
     (void)state;
@@ -282,17 +298,8 @@ test_ome(void **state) {
         "Type=\"uint16\" SizeX=\"12\" SizeY=\"10\" SizeZ=\"4\" SizeC=\"2\" SizeT=\"1\" "
         "PhysicalSizeX=\"0.5\" PhysicalSizeY=\"0.25\" PhysicalSizeZ=\"2.0\" "
         "PhysicalSizeXUnit=\"µm\"><TiffData/></Pixels></Image></OME>";
-    wopt o = {.w = 12,
-              .h = 10,
-              .pages = 8,
-              .spp = 1,
-              .type = VV_U16,
-              .compression = COMPRESSION_LZW,
-              .rows_per_strip = 10,
-              .description = desc,
-              .page_cz = ome_page};
     const char *p = out_path("stack.ome.tif");
-    write_tiff(p, &o);
+    write_ome_stack(p, desc);
     for (int c = 0; c < 2; c++) {
         vv_volume *v = NULL;
         vt_ok(vv_tiff_read(&v, p, c));
@@ -327,17 +334,8 @@ test_ome_units(void **state) {
                  "SizeT=\"1\" PhysicalSizeX=\"0.5\" PhysicalSizeY=\"0.25\" "
                  "PhysicalSizeZ=\"%s\" %s><TiffData/></Pixels></Image></OME>",
                  u ? "0.5" : "500", units[u]);
-        wopt o = {.w = 12,
-                  .h = 10,
-                  .pages = 8,
-                  .spp = 1,
-                  .type = VV_U16,
-                  .compression = COMPRESSION_NONE,
-                  .rows_per_strip = 10,
-                  .description = desc,
-                  .page_cz = ome_page};
         const char *p = out_path(u ? "units_nm.ome.tif" : "units_z_nm.ome.tif");
-        write_tiff(p, &o);
+        write_ome_stack(p, desc);
         vv_volume *v = NULL;
         vt_ok(vv_tiff_read(&v, p, 0));
         for (int a = 0; a < 3; a++)
