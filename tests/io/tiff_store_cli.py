@@ -225,14 +225,14 @@ refused("mixed", mixed, "z09.tif")
 
 def descendants(pid):
     """PID and every process below it (from /proc/PID/task/*/children)."""
-    found, todo = [], [pid]
-    while todo:
-        q = todo.pop()
+    found, to_visit = [], [pid]
+    while to_visit:
+        q = to_visit.pop()
         found.append(q)
         try:
             for t in os.listdir(f"/proc/{q}/task"):
                 with open(f"/proc/{q}/task/{t}/children") as f:
-                    todo.extend(int(c) for c in f.read().split())
+                    to_visit.extend(int(c) for c in f.read().split())
         except (OSError, ValueError):
             pass  # a process that ended meanwhile
     return found
