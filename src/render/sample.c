@@ -205,7 +205,7 @@ fill_gradients(vv_vcache *c) {
     if (vv_vc_have_avx2())
         encode = vv_oct_encode_n_avx2;
 #endif
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (VV_VC_PARALLEL(nx, ny, nz))
     for (int k = 0; k < nz; k++) {
         float gx[RUN], gy[RUN], gz[RUN];
         for (int j = 0; j < ny; j++) {
@@ -252,7 +252,7 @@ vv_vcache_need_gmag(vv_vcache *c) {
     /* the volume's own dims: a duplicated single-voxel axis has no gradient */
     const int dims[3] = {c->vol->dims[0], c->vol->dims[1], c->vol->dims[2]};
     const int nx = c->nx, ny = c->ny, nz = c->nz;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (VV_VC_PARALLEL(nx, ny, nz))
     for (int k = 0; k < nz; k++)
         for (int j = 0; j < ny; j++)
             for (int i = 0; i < nx; i++) {
@@ -285,7 +285,7 @@ vv_vcache_need_gmag(vv_vcache *c) {
 static void
 fill_minmax(vv_vcache *c) {
     const int nx = c->nx, ny = c->ny, nz = c->nz;
-#pragma omp parallel for schedule(static) collapse(2)
+#pragma omp parallel for schedule(static) collapse(2) if (VV_VC_PARALLEL(nx, ny, nz))
     for (int bk = 0; bk < c->bz; bk++)
         for (int bj = 0; bj < c->by; bj++)
             for (int bi = 0; bi < c->bx; bi++) {
@@ -382,7 +382,7 @@ cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
         return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
     }
     if (!c->q16_borrowed) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (VV_VC_PARALLEL(c->nx, c->ny, c->nz))
         for (int k = 0; k < nz; k++)
             for (int j = 0; j < ny; j++)
                 fill_row(c, vol, j, k, (size_t)k * c->sz + (size_t)j * c->sy);

@@ -40,6 +40,11 @@
 #include "volvis/render.h"
 
 #define VV_VC_BLOCK 4 /* subvolume side in cells */
+/* Whether a cache of nx x ny x nz samples is filled on the frame's threads:
+ * a small one (a brick of the out-of-core drivers) on the caller's alone,
+ * whose cost a team's wake-up and spinning wait would outweigh (the spin
+ * takes the cores a GPU driver's threads draw on: lavapipe). */
+#define VV_VC_PARALLEL(nx, ny, nz) ((size_t)(nx) * (size_t)(ny) * (size_t)(nz) >= ((size_t)1 << 19))
 #define VV_VC_GROUP 4 /* subvolumes per side of a group (the pyramid's second level) */
 /* cached volumes per renderer: >= the objects of one render, so none in use
  * is evicted */
