@@ -765,6 +765,9 @@ drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv
             rg.object = object;
             rg.whole = proxy ? &wv : NULL;
             rg.rays = pass ? &rays : NULL;
+            /* the bricks come front to back: what is composited so far lies
+             * in front of this one (a renderer's early ray termination) */
+            rg.front = !pass && !dc.split && whole.op == VV_REGION_OVER ? whole.image : NULL;
             rg.from = hdr; /* the brick known by its box: a renderer may keep it */
             vv_region_rect(&rg, i2w, view, in.slo, in.shi);
             if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)

@@ -111,7 +111,11 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
                        (unsigned long long)(after.hits - before.hits),
                        (unsigned long long)(after.skipped - before.skipped), nbricks);
                 if (m == 0) {
-                    assert_true(db >= 50);
+                    /* the ray caster takes the whole render's samples: its
+                     * early ray termination carried across the bricks
+                     * (vv_render_region.front; without it, 58 dB); the ray
+                     * tracer's regions end their rays on their own */
+                    assert_true(db >= (ri == 0 ? 100 : 50));
                     /* the air around the head is transparent under 100..1500 */
                     assert_true(after.skipped > before.skipped);
                 } else {

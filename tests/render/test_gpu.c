@@ -763,7 +763,10 @@ test_over_device_budget(void **state) {
         const double db = vt_image_psnr(a, b, NULL);
         printf("# mode %d: bricks within 2 MiB of the device against the whole: %.1f dB\n",
                (int)modes[m], db);
-        assert_true(db >= (m == 1 ? 60 : 50));
+        /* composite: the samples of the whole render, its early ray
+         * termination carried across the bricks (vv_render_region.front;
+         * without it 58 dB) */
+        assert_true(db >= (m == 0 ? 100 : m == 1 ? 60 : 50));
         save(b, names[m]);
         vv_image_free(a);
         vv_image_free(b);

@@ -232,6 +232,21 @@ typedef struct vv_render_region {
      * or max) and then adds (what the renderers do along a whole ray).
      */
     int pass_channel;
+    /**
+     * What lies in front of this region along every ray, or NULL (an
+     * initializer's default): nothing known. The image the caller has
+     * composited so far, front to back (view->width x view->height,
+     * premultiplied RGBA; only its opacity is read), when its regions come
+     * in front-to-back order under the composite rule (VV_REGION_OVER) and
+     * rays is NULL. A renderer with early ray termination may then stop a
+     * ray once the opacity in front and its own together reach its
+     * threshold, 1 - (1 - front) (1 - own) >= threshold, and leave a pixel
+     * already that opaque clear: the samples it does not take are those the
+     * whole render would not have taken (Levoy 1990's early ray
+     * termination, carried across the bricks of sort-last compositing).
+     * Borrowed; not written during the render.
+     */
+    const vv_image *front;
 } vv_render_region;
 
 /** A region render's output: the partial image and how it combines. */

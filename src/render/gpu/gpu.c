@@ -99,18 +99,21 @@ typedef struct gpu_ubo {
 
 /* the frame's flags (misc[3]) and a channel's (chf[k][0]) */
 enum { F_SHADING = 1, F_SKIPPING = 4, F_LUT2D = 32 };
+/* a region render: the opacity in front of it in B_FRONT
+ * (vv_render_region.front); its rectangle (rect) alone dispatched */
+enum { F_FRONT = 64, F_RECT = 128 };
 enum { F_NORMALS = 2, F_INTEGER = 16 };
 
-/* The buffers the shader reads and writes (bindings 0, 3 .. 9 and 11); the
- * uploads (B_UBO .. B_LUT2) come first, then the outputs. */
-enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_LUT2, B_RGBA, B_DEPTH, B_KEY, N_BUF };
-static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 11, 7, 8, 9};
+/* The buffers the shader reads and writes (bindings 0, 3 .. 9, 11 and 18);
+ * the uploads (B_UBO .. B_FRONT) come first, then the outputs. */
+enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_LUT2, B_FRONT, B_RGBA, B_DEPTH, B_KEY, N_BUF };
+static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 11, 18, 7, 8, 9};
 /* the 3-D images: channel k's values at I_VALUES + 2 k, its gradient codes
  * at I_NORMALS + 2 k (k = 0: a one-channel object's), the gradient
  * magnitudes of a 2-D transfer function at I_GMAG */
 enum { I_VALUES, I_NORMALS, I_GMAG = 2 * GPU_MAX_CH, N_IMG };
 static const int image_binding[N_IMG] = {1, 2, 12, 15, 13, 16, 14, 17, 10};
-#define N_BINDINGS 18
+#define N_BINDINGS 19
 
 #if VV_HAVE_VULKAN
 /* A brick on the device (the brick cache): the voxels of one region known
@@ -253,14 +256,14 @@ open_device(gpu_state *st) {
     vv_vk *vk = &st->vk;
     VkDescriptorSetLayoutBinding b[N_BINDINGS];
     for (int i = 0; i < N_BINDINGS; i++) {
-        b[i] = (VkDescriptorSetLayoutBinding){.binding = (uint32_t)i,
-                                              .descriptorType =
-                                                  i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
-                                                  : i == 1 || i == 2 || i == 10 || i >= 12
-                                                      ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
-                                                      : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                              .descriptorCount = 1,
-                                              .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT};
+        b[i] = (VkDescriptorSetLayoutBinding){
+            .binding = (uint32_t)i,
+            .descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
+                              : i == 1 || i == 2 || i == 10 || (i >= 12 && i <= 17)
+                                  ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+                                  : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            .descriptorCount = 1,
+            .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT};
     }
     const VkDescriptorSetLayoutCreateInfo li = {
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
@@ -296,7 +299,7 @@ open_device(gpu_state *st) {
         vk->f.vkDestroyShaderModule(vk->dev, mod, NULL);
     const VkDescriptorPoolSize ps[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
                                         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, N_IMG},
-                                        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8}};
+                                        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 9}};
     const VkDescriptorPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
                                            .maxSets = 1,
                                            .poolSizeCount = 3,
@@ -522,17 +525,31 @@ upload_brick(gpu_state *st, gpu_brick *b, const vv_vcache *c, int what, int real
     return VV_OK;
 }
 
-/* The image from the readback buffer (RGBA, then depth), in slices on the
- * frame's threads: one thread copies a 3840 x 2160 float image (166 MB) at
- * a few GB/s, several times the device's time for the frame. */
+/* Pixels px0 .. px1 - 1 of the image from the readback buffer (RGBA, then
+ * depth, of npx pixels each), columns x0 .. x1 - 1 of each of their rows
+ * alone when that is not the whole row (a region's rectangle), in slices
+ * on the frame's threads: one thread copies a 3840 x 2160 float image
+ * (166 MB) at a few GB/s, several times the device's time for the frame. */
 static void
-copy_back(vv_image *out, float *key, const unsigned char *r, size_t npx, int threads) {
+copy_back(vv_image *out, float *key, const unsigned char *r, size_t npx, size_t px0, size_t px1,
+          int x0, int x1, int threads) {
+    const size_t W = (size_t)out->width;
+    if (x0 > 0 || (size_t)x1 < W) {
+        for (size_t row = px0; row < px1; row += W) {
+            const size_t a = row + (size_t)x0, m = (size_t)(x1 - x0);
+            memcpy(out->rgba + 4 * a, r + 16 * a, 16 * m);
+            memcpy(out->depth + a, r + 16 * npx + 4 * a, 4 * m);
+            if (key)
+                memcpy(key + a, r + 20 * npx + 4 * a, 4 * m);
+        }
+        return;
+    }
     const size_t slice = (size_t)1 << 16; /* pixels a piece */
-    const long n = (long)((npx + slice - 1) / slice);
+    const long n = (long)((px1 - px0 + slice - 1) / slice);
     const int nt = threads > 0 ? threads : vv_threads_get();
 #pragma omp parallel for schedule(static) num_threads(nt) if (n > 1)
     for (long i = 0; i < n; i++) {
-        const size_t a = (size_t)i * slice, m = npx - a < slice ? npx - a : slice;
+        const size_t a = px0 + (size_t)i * slice, m = px1 - a < slice ? px1 - a : slice;
         memcpy(out->rgba + 4 * a, r + 16 * a, 16 * m);
         memcpy(out->depth + a, r + 16 * npx + 4 * a, 4 * m);
         if (key)
@@ -619,8 +636,11 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
     vv_vcache *c = NULL;              /* channel 0's cache: the grid and its subvolumes */
     const vv_vtables *tab = &tabs[0]; /* channel 0's tables */
     size_t nblocks = 1;
-    vv_vshading sh;            /* the object's shading constants (its specular table goes up) */
-    const float *lut2d = NULL; /* its 2-D transfer function's table, or NULL */
+    /* the pixels dispatched and read back: the rows, the columns */
+    int row0 = 0, row1 = view->height, col0 = 0, col1 = view->width;
+    const vv_image *front = NULL; /* the opacity in front of a region (F_FRONT) */
+    vv_vshading sh;               /* the object's shading constants (its specular table goes up) */
+    const float *lut2d = NULL;    /* its 2-D transfer function's table, or NULL */
     if (obj) {
         if (!(obj->step > 0))
             return vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", obj->name);
@@ -769,6 +789,24 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                 u.rect[1] = rg->y0;
                 u.rect[2] = rg->x1;
                 u.rect[3] = rg->y1;
+                /* only the rectangle is dispatched and read back: the
+                 * caller keeps the image clear outside it */
+                row0 = rg->y0 > 0 ? rg->y0 : 0;
+                row1 = rg->y1 < view->height ? rg->y1 : view->height;
+                row1 = row1 > row0 ? row1 : row0;
+                col0 = rg->x0 > 0 ? rg->x0 : 0;
+                col1 = rg->x1 < view->width ? rg->x1 : view->width;
+                col1 = col1 > col0 ? col1 : col0;
+                if (col1 == col0)
+                    row1 = row0; /* nothing to draw */
+                u.misc[3] |= F_RECT;
+            }
+            /* early ray termination across the caller's regions (composite) */
+            if (rg->front && mode == VV_MODE_COMPOSITE &&
+                (!multi || obj->blend == VV_BLEND_COMPOSITE) && rg->front->width == view->width &&
+                rg->front->height == view->height && st->early_termination < 1) {
+                front = rg->front;
+                u.misc[3] |= F_FRONT;
             }
         }
         if (mode == VV_MODE_ATTENUATED_MIP && !multi) {
@@ -822,6 +860,7 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                                        (nblocks * (nch > 1 ? nch : 1) + 3) & ~(size_t)3,
                                        nblocks * 8,
                                        lut2d ? (VkDeviceSize)VV_VC_LUT2_G * VV_VC_LUT2_V * 16 : 16,
+                                       front ? npx * 4 : 16,
                                        npx * 16,
                                        npx * 4,
                                        npx * 4};
@@ -927,11 +966,23 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                 mm[2 * b + 1] = c ? c->bmax[b] : 0;
             }
         }
+        /* the opacity in front, of the rows dispatched alone */
+        const size_t px0 = (size_t)row0 * (size_t)view->width,
+                     px1 = (size_t)row1 * (size_t)view->width;
+        if (front) {
+            float *fa = (float *)(m + offs[B_FRONT]);
+            for (size_t i = px0; i < px1; i++)
+                fa[i] = front->rgba[4 * i + 3];
+        }
         VkBufferCopy cp[B_RGBA];
         for (int i = 0; i < B_RGBA; i++) {
-            if ((i == B_DIST && !dist_up) || (i == B_MM && !mm_up))
+            if ((i == B_DIST && !dist_up) || (i == B_MM && !mm_up) ||
+                (i == B_FRONT && (!front || px1 == px0)))
                 continue;
             cp[i] = (VkBufferCopy){.srcOffset = offs[i], .dstOffset = 0, .size = sizes[i]};
+            if (i == B_FRONT)
+                cp[i] = (VkBufferCopy){
+                    .srcOffset = offs[i] + 4 * px0, .dstOffset = 4 * px0, .size = 4 * (px1 - px0)};
             vk->f.vkCmdCopyBuffer(vk->cmd, st->staging.buf, st->buf[i].buf, 1, &cp[i]);
         }
         vv_vk_barrier(vk, 0);
@@ -973,15 +1024,20 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
             vk->f.vkCmdBindPipeline(vk->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, st->pipe);
             vk->f.vkCmdBindDescriptorSets(vk->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, st->layout, 0, 1,
                                           &st->set, 0, NULL);
-            vk->f.vkCmdDispatch(vk->cmd, (uint32_t)(view->width + 7) / 8,
-                                (uint32_t)(view->height + 7) / 8, 1);
-            vv_vk_barrier(vk, 1);
-            const VkBufferCopy back[3] = {
-                {0, 0, npx * 16}, {0, npx * 16, npx * 4}, {0, npx * 20, npx * 4}};
-            vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_RGBA].buf, st->readback.buf, 1, &back[0]);
-            vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_DEPTH].buf, st->readback.buf, 1, &back[1]);
-            if (key)
-                vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_KEY].buf, st->readback.buf, 1, &back[2]);
+            const size_t n = px1 - px0; /* the pixels of the rows dispatched */
+            if (n > 0) {
+                vk->f.vkCmdDispatch(vk->cmd, (uint32_t)(col1 - col0 + 7) / 8,
+                                    (uint32_t)(row1 - row0 + 7) / 8, 1);
+                vv_vk_barrier(vk, 1);
+                const VkBufferCopy back[3] = {{px0 * 16, px0 * 16, n * 16},
+                                              {px0 * 4, npx * 16 + px0 * 4, n * 4},
+                                              {px0 * 4, npx * 20 + px0 * 4, n * 4}};
+                vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_RGBA].buf, st->readback.buf, 1, &back[0]);
+                vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_DEPTH].buf, st->readback.buf, 1, &back[1]);
+                if (key)
+                    vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_KEY].buf, st->readback.buf, 1,
+                                          &back[2]);
+            }
             vv_vk_timestamp(vk, 1);
             double ms = 0;
             s = vv_vk_submit_wait(vk, &ms);
@@ -998,7 +1054,8 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                     st->dist_modified[k] = cc[k]->modified;
                     st->dist_key[k] = cc[k]->key;
                 }
-                copy_back(out, key, st->readback.map, npx, opt ? opt->threads : 0);
+                copy_back(out, key, st->readback.map, npx, px0, px1, col0, col1,
+                          opt ? opt->threads : 0);
                 if (opt && opt->stats) {
                     /* atomic: the multiresolution driver's clones add to one struct */
                     vv_render_stats *rs = opt->stats;

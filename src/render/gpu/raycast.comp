@@ -26,6 +26,8 @@ const int MODE_COMPOSITE = 0, MODE_MIP = 1, MODE_MINIP = 2, MODE_XRAY = 3, MODE_
 const int MODE_ATTENUATED_MIP = 5;
 /* the frame's flags (misc.w) and a channel's (chf[ch].x) */
 const int F_SHADING = 1, F_SKIPPING = 4, F_LUT2D = 32;
+/* a region render: the opacity in front of it (Front); its rectangle alone dispatched */
+const int F_FRONT = 64, F_RECT = 128;
 const int F_NORMALS = 2, F_INTEGER = 16;
 const int LUT2_V = 1024, LUT2_G = 128;
 const int MAX_LIGHTS = 16, MAX_PLANES = 16, LUT = 4096, SPEC = 2048, BLOCK = 4, MAX_CH = 4;
@@ -78,6 +80,9 @@ layout(set = 0, binding = 14) uniform sampler3D vol3;
 layout(set = 0, binding = 15) uniform isampler3D onrm1;
 layout(set = 0, binding = 16) uniform isampler3D onrm2;
 layout(set = 0, binding = 17) uniform isampler3D onrm3;
+/* F_FRONT: per pixel (row-major, the whole view), the opacity composited in
+ * front of this region (vv_render_region.front) */
+layout(std430, set = 0, binding = 18) readonly buffer Front { float front_a[]; };
 
 ivec3 gmax;   /* dims - 2: the last cell */
 vec3 o_i;     /* index point at t = tb (the whole volume's index space) */
@@ -324,7 +329,8 @@ iso_refine(float ta, float va, float tbb, float iso) {
 
 void
 main() {
-    const ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    const ivec2 px = ivec2(gl_GlobalInvocationID.xy) +
+                     ((fr.misc.w & F_RECT) != 0 ? fr.rect.xy : ivec2(0));
     if (px.x >= fr.misc.x || px.y >= fr.misc.y)
         return;
     const uint at = uint(px.y) * uint(fr.misc.x) + uint(px.x);
@@ -338,6 +344,21 @@ main() {
         out_depth[at] = INF;
         out_key[at] = NAN;
         return;
+    }
+    /* early ray termination carried across regions: the ray ends once the
+     * opacity in front (af) and this region's (A) reach the threshold,
+     * af + (1 - af) A >= et, as the whole render's ray ends; a pixel
+     * already that opaque takes no sample here */
+    float et_ray = fr.p0.y;
+    if ((fr.misc.w & F_FRONT) != 0) {
+        const float af = front_a[at];
+        if (af >= et_ray) {
+            out_rgba[at] = vec4(0);
+            out_depth[at] = INF;
+            out_key[at] = NAN;
+            return;
+        }
+        et_ray = (et_ray - af) / (1.0 - af);
     }
     float key = NAN;
     gmax = fr.dims.xyz - 2;
@@ -419,7 +440,7 @@ main() {
                 Ac[ch] = 0.0;
             }
             const bool additive = blend == BLEND_ADDITIVE;
-            const float et = fr.p0.y;
+            const float et = et_ray;
             float k = ceil(t0 * inv_dt);
             float kend = floor(t1 * inv_dt);
             if (region) { /* the composite rule by regions: the region's samples */
@@ -529,7 +550,7 @@ main() {
                 k = max(k, ceil(ra * inv_dt));
                 kend = min(kend, floor(rb * inv_dt));
             }
-            const float et = fr.p0.y;
+            const float et = et_ray;
             while (k <= kend) {
                 const float t = k * dt;
                 const vec3 p = point_at(t);

@@ -123,7 +123,10 @@ typedef struct rc_frame {
     float bg[3];
     vv_vlight lights[VV_MAX_LIGHTS];
     int n_lights;
-    float et;           /* early termination */
+    float et; /* early termination */
+    /* a region render's opacity in front (vv_render_region.front): one
+     * object in composite mode alone, else NULL */
+    const vv_image *front;
     int point_lights;   /* any point light (needs the world position of samples) */
     int avx2;           /* the processor has AVX2 and FMA (vv_vray_classify) */
     vv_camera_rays cam; /* primary rays */
@@ -304,7 +307,7 @@ mix_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const float
  * classifies a chunk of samples at a time (vv_vray_classify: the same
  * values, hence the same image, as the one-channel kernel's). */
 static void
-trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
+trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float et, rc_result *res) {
     const int additive = ob->blend == VV_BLEND_ADDITIVE, nch = ob->nch;
     float C[VV_MAX_CHANNELS][3], A[VV_MAX_CHANNELS];
     int live = additive ? nch : 1;
@@ -315,7 +318,6 @@ trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result
     if (ray_setup(ob, wr, &r)) {
         const vv_vcache *c = ob->ch[0].c;
         const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
-        const float et = fr->et;
         const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
         const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1,
                        bzm = (unsigned)c->bz - 1;
@@ -475,7 +477,8 @@ chunk_shade_table(const rc_obj *ob, int m, const size_t *cell, const float *fx, 
  * classified, shaded (eight at a time with AVX2: vv_vshade8) and
  * composited. Produces the same samples (t = k dt) as trace_composite. */
 static void
-trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
+trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float et,
+                    rc_result *res) {
     vv_vray r;
     float C[3] = {0, 0, 0}, A = 0;
     float depth = INFINITY;
@@ -483,7 +486,6 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
         goto done;
     const vv_vcache *c = ob->c;
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
-    const float et = fr->et;
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
     double k = vv_ceil_pos(r.t0 * inv_dt);
     const double kend = vv_floor_pos(r.t1 * inv_dt);
@@ -585,7 +587,8 @@ done:
  * opacity and colour, then their shading (eight at a time with AVX2), then
  * compositing in order. */
 static void
-trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
+trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float et,
+                       rc_result *res) {
     vv_vray r;
     float C[3] = {0, 0, 0}, A = 0;
     float depth = INFINITY;
@@ -594,7 +597,6 @@ trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
     const vv_vcache *c = ob->c;
     const vv_vtables *tab = &ob->tab;
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
-    const float et = fr->et;
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
     const double k0 = vv_ceil_pos(r.t0 * inv_dt);
     double k = k0, klast;
@@ -858,7 +860,7 @@ rc_march_iso(void *ctx, int ai, const vv_vray *r, double th) {
 
 /* Front-to-back compositing of all composite and iso objects along one ray. */
 static void
-trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
+trace_composite(const rc_frame *fr, const vv_ray *wr, float et, rc_result *res) {
     vv_vray rays[RC_MAX_OBJ];
     rc_march m; /* fields set one by one: an initializer would clear obs[] on every ray */
     m.fr = fr;
@@ -879,8 +881,8 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
             na++;
         }
     if (na > 0)
-        vv_march(rays, na, tmin, tmax, fr->dt, fr->et, &m.A, &m, NULL, rc_march_sample,
-                 rc_march_iso, NULL);
+        vv_march(rays, na, tmin, tmax, fr->dt, et, &m.A, &m, NULL, rc_march_sample, rc_march_iso,
+                 NULL);
     result_set(res, m.C, m.A, m.depth);
 }
 
@@ -1039,16 +1041,31 @@ cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5],
     /* inline: this runs for every pixel, most of which miss the volume */
     const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
     rc_result res = {{0, 0, 0}, 0, INFINITY, 0, 0};
+    float et = fr->et;
+    if (fr->front) {
+        /* early ray termination across regions (vv_render_region.front):
+         * the ray ends once af + (1 - af) A >= et, as the whole ray would */
+        const float af =
+            fr->front->rgba[4 * ((size_t)y * (size_t)fr->front->width + (size_t)x) + 3];
+        if (af >= et) {
+            px[0] = px[1] = px[2] = px[3] = 0;
+            px[4] = INFINITY;
+            if (key_out)
+                *key_out = NAN;
+            return;
+        }
+        et = (et - af) / (1 - af);
+    }
     if (fr->n_comp == 1 && fr->objs[0].nch)
-        trace_channels(fr, &fr->objs[0], &wr, &res);
+        trace_channels(fr, &fr->objs[0], &wr, et, &res);
     else if (fr->preint)
-        trace_composite_preint(fr, &fr->objs[0], &wr, &res);
+        trace_composite_preint(fr, &fr->objs[0], &wr, et, &res);
     else if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
-        trace_composite_one(fr, &fr->objs[0], &wr, &res);
+        trace_composite_one(fr, &fr->objs[0], &wr, et, &res);
     else if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_ISO)
         trace_iso_one(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp > 0)
-        trace_composite(fr, &wr, &res);
+        trace_composite(fr, &wr, et, &res);
     /* projection objects: combined behind the composited ones */
     float P[3] = {0, 0, 0}, PA = 0, pdepth = INFINITY, key = NAN;
     for (int i = fr->n_comp; i < fr->n_obj; i++) {
@@ -1057,7 +1074,7 @@ cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5],
         if (ob->nch) { /* a multi-channel object, additive or maximum */
             rc_result g;
             if (ob->blend == VV_BLEND_ADDITIVE)
-                trace_channels(fr, ob, &wr, &g);
+                trace_channels(fr, ob, &wr, fr->et, &g);
             else
                 trace_channels_maximum(fr, ob, &wr, &g);
             for (int ch = 0; ch < 3; ch++)
@@ -1345,6 +1362,13 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
         for (int i = 0; i < fr.n_obj; i++)
             pays &= objs[i].mode == VV_MODE_COMPOSITE || objs[i].mode == VV_MODE_MIP ||
                     objs[i].mode == VV_MODE_MINIP;
+        /* early ray termination across the caller's regions: one object
+         * under the composite rule, a ray a pixel */
+        if (region && region->front && !region->rays && fr.n_obj == 1 && fr.n_comp == 1 &&
+            objs[0].mode == VV_MODE_COMPOSITE &&
+            (!objs[0].nch || objs[0].blend == VV_BLEND_COMPOSITE) &&
+            region->front->width == view->width && region->front->height == view->height)
+            fr.front = region->front;
         fr.refine = vv_frame_refine_for(&st->refine, opt ? opt->quality : 2, region != NULL, pays,
                                         &fr.tolerance);
         vv_frame_job job;
