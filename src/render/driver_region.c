@@ -462,6 +462,12 @@ drv_render_region(const vv_renderer_ops *ops, void *state, const vv_world *world
         return vv_error_set(VV_ERR_INVALID, "%s: region image is %d x %d but the view is %d x %d",
                             name, out->image->width, out->image->height, view->width, view->height);
     }
+    if (region->front && (region->rays || region->front->width != view->width ||
+                          region->front->height != view->height))
+        return vv_error_set(VV_ERR_INVALID,
+                            "%s: the image in front of a region must be the view's (%d x %d) "
+                            "and its rays one a pixel",
+                            name, view->width, view->height);
     if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
         return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
                             region->object);

@@ -244,7 +244,8 @@ typedef struct vv_render_region {
      * already that opaque clear: the samples it does not take are those the
      * whole render would not have taken (Levoy 1990's early ray
      * termination, carried across the bricks of sort-last compositing).
-     * Borrowed; not written during the render.
+     * Borrowed; not written during the render. A front of another size,
+     * or with rays, is refused (VV_ERR_INVALID).
      */
     const vv_image *front;
 } vv_render_region;

@@ -803,8 +803,7 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
             }
             /* early ray termination across the caller's regions (composite) */
             if (rg->front && mode == VV_MODE_COMPOSITE &&
-                (!multi || obj->blend == VV_BLEND_COMPOSITE) && rg->front->width == view->width &&
-                rg->front->height == view->height && st->early_termination < 1) {
+                (!multi || obj->blend == VV_BLEND_COMPOSITE) && st->early_termination < 1) {
                 front = rg->front;
                 u.misc[3] |= F_FRONT;
             }

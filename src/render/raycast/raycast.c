@@ -1364,10 +1364,9 @@ render_frame(void *state, const vv_world *w, const vv_view *view, const vv_rende
                     objs[i].mode == VV_MODE_MINIP;
         /* early ray termination across the caller's regions: one object
          * under the composite rule, a ray a pixel */
-        if (region && region->front && !region->rays && fr.n_obj == 1 && fr.n_comp == 1 &&
+        if (region && region->front && fr.n_obj == 1 && fr.n_comp == 1 &&
             objs[0].mode == VV_MODE_COMPOSITE &&
-            (!objs[0].nch || objs[0].blend == VV_BLEND_COMPOSITE) &&
-            region->front->width == view->width && region->front->height == view->height)
+            (!objs[0].nch || objs[0].blend == VV_BLEND_COMPOSITE))
             fr.front = region->front;
         fr.refine = vv_frame_refine_for(&st->refine, opt ? opt->quality : 2, region != NULL, pays,
                                         &fr.tolerance);
